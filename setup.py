@@ -1,0 +1,51 @@
+"""ColorSort: a conveyor colour-sorting cell as a robosuite task, with expert, recorder and benchmark."""
+
+from pathlib import Path
+
+from setuptools import find_packages, setup
+
+# robosuite 1.5.2 declares mink==0.0.5 (numpy<2), opencv-python and pynput, none of which it
+# imports at run time; overrides.txt drops those pins so that the stack below resolves.
+# See README "Install" for the uv command and the pip-only alternative.
+INSTALL_REQUIRES = [
+    "robosuite==1.5.2",
+    "mujoco==3.9.0",
+    "mink>=1.2,<1.3",
+    "numpy>=2,<3",
+    "opencv-python-headless>=4.11,<4.13",
+    "lerobot==0.4.4",
+    "ruckig>=0.19,<0.20",
+    "tqdm>=4.66",
+    "av>=15,<16",
+    # robosuite's real run-time needs, for `pip install --no-deps robosuite`:
+    "numba>=0.59",
+    "scipy>=1.11",
+    "Pillow>=10",
+    "termcolor>=2.4",
+    "qpsolvers[daqp,quadprog]>=4.3.1",
+]
+
+EXTRAS_REQUIRE = {
+    "dev": ["pytest>=8", "build>=1.2"],
+}
+
+setup(
+    name="colorsort",
+    version="0.1.0",
+    description=(
+        "An ABB IRB 140 with a vacuum cup sorting coloured boxes off a conveyor: "
+        "a robosuite task, scripted expert, LeRobot demo recorder and benchmark."
+    ),
+    long_description=Path(__file__).with_name("README.md").read_text(encoding="utf-8")
+    if Path(__file__).with_name("README.md").exists()
+    else "",
+    long_description_content_type="text/markdown",
+    python_requires=">=3.10,<3.12",
+    # The top-level assets/ folder ships inside the wheel as the package colorsort.assets.
+    packages=find_packages(include=["colorsort", "colorsort.*"]) + ["colorsort.assets"],
+    package_dir={"colorsort.assets": "assets"},
+    package_data={"colorsort.assets": ["*.md", "**/*.xml", "**/*.md", "**/*.stl", "**/*.png"]},
+    install_requires=INSTALL_REQUIRES,
+    extras_require=EXTRAS_REQUIRE,
+    entry_points={"console_scripts": ["colorsort-demo=colorsort.demo:main"]},
+)
