@@ -1,0 +1,125 @@
+"""Task configuration: the cell's fixed layout and the tunable task parameters, with presets.
+
+Everything is a frozen dataclass; ``make_config("seed", belt_speed=0.08)`` picks a preset and
+overrides fields one by one, validating every value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+# Box and bin colours the cell knows, as RGBA in [0, 1]. Red, green and blue have bins.
+COLORS: dict[str, tuple[float, float, float, float]] = {
+    "red": (0.85, 0.10, 0.10, 1.0),
+    "green": (0.10, 0.70, 0.15, 1.0),
+    "blue": (0.10, 0.25, 0.85, 1.0),
+    "yellow": (0.90, 0.80, 0.10, 1.0),
+    "purple": (0.55, 0.15, 0.65, 1.0),
+}
+BIN_COLORS: tuple[str, ...] = ("red", "green", "blue")
+ROBOTS: tuple[str, ...] = ("IRB140", "Panda", "UR5e")
+GRIPPERS: tuple[str, ...] = ("SuctionGripper", "default")
+
+
+@dataclass(frozen=True)
+class CellLayout:
+    """Where things stand, in the world frame [m]; the robot base is at the origin on the floor.
+
+    The original cell (DESIGN.md) put the blue bin 0.88 m from the arm, beyond the IRB 140's
+    0.81 m reach; this layout keeps its topology (belt on the arm's right running toward it,
+    bins in front in a row 0.325 m apart along y) and moves everything within reach.
+    """
+
+    belt_start_x: float = 1.30  # upstream end, where boxes appear
+    belt_end_x: float = 0.20  # downstream end: boxes riding past it fall off
+    belt_y: float = -0.40  # belt centre line
+    belt_width: float = 0.25
+    belt_top_z: float = 0.40  # height of the belt's carrying surface
+    sensor_x: float = 0.35  # the ray across the belt; a box stops with its leading face here
+    sensor_height: float = 0.05  # ray height above the belt surface
+    spawn_x: float = 1.22  # box centre at spawn
+    box_size: float = 0.10  # cube edge
+    bin_x: float = 0.42  # bin centres
+    bin_y0: float = -0.05  # red bin centre; green and blue follow at +bin_spacing
+    bin_spacing: float = 0.325
+    bin_size: tuple[float, float, float] = (0.46, 0.31, 0.30)  # outer x, y, height
+    bin_wall: float = 0.01
+
+    @property
+    def sensor_range(self) -> float:
+        """Length of the ray [m]: it spans the belt and ends before the far rail."""
+        return self.belt_width + 0.02
+
+    @property
+    def pick_point(self) -> tuple[float, float, float]:
+        """Centre of a box's top face when it stops at the sensor."""
+        half = self.box_size / 2
+        return (self.sensor_x + half, self.belt_y, self.belt_top_z + self.box_size)
+
+    def bin_center(self, index: int) -> tuple[float, float]:
+        """(x, y) of bin ``index`` (0 = red, 1 = green, 2 = blue)."""
+        return (self.bin_x, self.bin_y0 + index * self.bin_spacing)
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """The task's tunable parameters. Units in brackets."""
+
+    belt_speed: float = 0.20  # [m/s] belt surface speed while running
+    spawn_period: float = 4.0  # [s] sim time between box appearances
+    bin_capacity: int = 4  # boxes a bin holds before it is emptied
+    boxes_to_sort: int = 5  # correctly placed boxes that make an episode a success
+    box_colors: tuple[str, ...] = BIN_COLORS  # colours drawn (uniformly) for new boxes
+    pool_size: int = 8  # boxes allocated when the model is built
+    lateral_jitter: float = 0.0  # [m] max |offset| of a new box from the belt centre line
+    yaw_jitter: float = 0.0  # [deg] max |yaw| of a new box
+    box_mass: float = 0.5  # [kg]
+    time_limit: float = 60.0  # [s] sim time per episode (sets robosuite's horizon)
+
+    def __post_init__(self) -> None:
+        _check_range("belt_speed", self.belt_speed, 0.0, 0.5, low_inclusive=False)
+        _check_range("spawn_period", self.spawn_period, 0.5, 600.0)
+        _check_range("bin_capacity", self.bin_capacity, 1, 100)
+        _check_range("boxes_to_sort", self.boxes_to_sort, 1, 10_000)
+        _check_range("pool_size", self.pool_size, 1, 64)
+        _check_range("lateral_jitter", self.lateral_jitter, 0.0, 0.06)
+        _check_range("yaw_jitter", self.yaw_jitter, 0.0, 45.0)
+        _check_range("box_mass", self.box_mass, 0.05, 5.0)
+        _check_range("time_limit", self.time_limit, 1.0, 36_000.0)
+        if isinstance(self.box_colors, str) or not self.box_colors:
+            raise ValueError(f"box_colors must be a non-empty tuple of colours from {sorted(COLORS)}")
+        unknown = [c for c in self.box_colors if c not in COLORS]
+        if unknown:
+            raise ValueError(f"Unknown box colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
+        object.__setattr__(self, "box_colors", tuple(self.box_colors))
+
+
+def _check_range(name: str, value: float, low: float, high: float, low_inclusive: bool = True) -> None:
+    ok_low = value >= low if low_inclusive else value > low
+    if not (ok_low and value <= high):
+        bracket = "[" if low_inclusive else "("
+        raise ValueError(f"{name}={value!r} is out of range; valid values lie in {bracket}{low}, {high}]")
+
+
+PRESETS: dict[str, TaskConfig] = {
+    # The original tutorial's numbers: a box every 30 s at 0.05 m/s, bins emptied at 2 boxes.
+    "seed": TaskConfig(belt_speed=0.05, spawn_period=30.0, bin_capacity=2, boxes_to_sort=3, time_limit=150.0),
+    # Four times the original's belt speed, a box every 4 s: room for 15 boxes a minute.
+    "default": TaskConfig(),
+}
+
+
+def make_config(preset: str = "default", **overrides: object) -> TaskConfig:
+    """A preset's ``TaskConfig`` with fields overridden by keyword.
+
+    Raises:
+        ValueError: unknown preset, unknown field, or an invalid value.
+    """
+    if preset not in PRESETS:
+        raise ValueError(f"Unknown preset {preset!r}. Valid presets: {sorted(PRESETS)}")
+    fields = {f.name for f in dataclasses.fields(TaskConfig)}
+    unknown = sorted(set(overrides) - fields)
+    if unknown:
+        raise ValueError(f"Unknown config field(s) {unknown}. Valid fields: {sorted(fields)}")
+    return dataclasses.replace(PRESETS[preset], **overrides)
