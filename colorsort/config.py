@@ -20,6 +20,13 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
 BIN_COLORS: tuple[str, ...] = ("red", "green", "blue")
 ROBOTS: tuple[str, ...] = ("IRB140", "Panda", "UR5e")
 GRIPPERS: tuple[str, ...] = ("SuctionGripper", "default")
+# Home poses [rad]: the cup 0.55 m up, 0.45 m in front of the base, pointing down. robosuite's
+# own Panda and UR5e poses are for a table on a pedestal and hit the bins here.
+ROBOT_HOMES: dict[str, tuple[float, ...]] = {
+    "IRB140": (0.0, 0.0, 0.0, 0.0, 1.5708, 0.0),
+    "Panda": (0.0, -0.3143, 0.0, -1.8538, 0.0, 1.5395, 0.785),
+    "UR5e": (-0.3024, -1.6395, 1.2246, -1.1559, -1.5708, -0.3023),
+}
 
 
 @dataclass(frozen=True)

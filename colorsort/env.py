@@ -31,11 +31,13 @@ import numpy as np
 from robosuite.controllers import load_composite_controller_config
 from robosuite.environments.manipulation.manipulation_env import ManipulationEnv
 from robosuite.models.tasks import ManipulationTask
+from robosuite.utils.mjcf_utils import new_element
 from robosuite.utils.observables import Observable, sensor
 
-from colorsort.config import BIN_COLORS, COLORS, GRIPPERS, ROBOTS, CellLayout, TaskConfig, make_config
+from colorsort.config import BIN_COLORS, COLORS, GRIPPERS, ROBOT_HOMES, ROBOTS, CellLayout, TaskConfig, make_config
 from colorsort.models.arena import PARK_Z, ConveyorArena
 from colorsort.paths import asset_path
+from colorsort.suction import VacuumSeal
 
 logger = logging.getLogger("colorsort")
 
@@ -185,9 +187,16 @@ class ColorSort(ManipulationEnv):
         super()._load_model()
         robot_model = self.robots[0].robot_model
         robot_model.set_base_xpos([0.0, 0.0, 0.0])
+        self.robots[0].init_qpos = np.array(ROBOT_HOMES[self.robots[0].name])
         arena = ConveyorArena(self.layout, self.config.pool_size, self.config.box_mass)
         arena.set_origin([0, 0, 0])
         self.model = ManipulationTask(mujoco_arena=arena, mujoco_robots=[robot_model])
+        gripper = self.robots[0].gripper["right"]
+        for name in arena.box_names:
+            self.model.equality.append(
+                new_element("weld", f"suction_{name}", body1=gripper.correct_naming("cup"), body2=name,
+                            active="false", solref="0.01 1")
+            )
         # robosuite's merge drops <custom>; keep the robot's (joint speed limits live there).
         custom = robot_model.root.find("custom")
         if custom is not None:
@@ -210,6 +219,13 @@ class ColorSort(ManipulationEnv):
         self._box_geom = [m.geom_name2id(f"box{i}_geom") for i in range(self.config.pool_size)]
         self._box_qpos = [m.get_joint_qpos_addr(f"box{i}_joint")[0] for i in range(self.config.pool_size)]
         self._box_qvel = [m.get_joint_qvel_addr(f"box{i}_joint")[0] for i in range(self.config.pool_size)]
+        gripper = self.robots[0].gripper["right"]
+        names = [f"box{i}" for i in range(self.config.pool_size)]
+        self.seal = VacuumSeal(
+            m._model, self.sim.data._data, cup_body=gripper.correct_naming("cup"),
+            pad_geom=gripper.correct_naming("cup_pad"), actuator=gripper.correct_naming("suction"),
+            box_bodies=names, box_geoms=[f"{n}_geom" for n in names], welds=[f"suction_{n}" for n in names],
+        )
 
     # ------------------------------------------------------------------ observations
     def _create_camera_sensors(self, cam_name, cam_w, cam_h, cam_d, cam_segs, modality="image"):
@@ -282,6 +298,7 @@ class ColorSort(ManipulationEnv):
     def _pre_action(self, action, policy_step=False):
         super()._pre_action(action, policy_step)
         self._drive_belt()
+        self.seal.update()
 
     def _drive_belt(self) -> None:
         """Run or stop the belt from the ray sensor, once per physics step.
@@ -330,6 +347,7 @@ class ColorSort(ManipulationEnv):
             "bins_emptied": t.bins_emptied,
             "spawned": t.spawned,
             "bins": {c: {"count": len(m), "matches": m} for c, m in bins.items()},
+            "suction_sealed": self.seal.held is not None,
             "is_success": self._check_success(),
         }
 
@@ -394,6 +412,7 @@ class ColorSort(ManipulationEnv):
     def _park(self, box: Box) -> None:
         """Return a box to the pool: below the floor, collisions off, gravity compensated."""
         m, d = self.sim.model, self.sim.data
+        self.seal.release(box.index)
         qa, va = self._box_qpos[box.index], self._box_qvel[box.index]
         d.qpos[qa : qa + 7] = (3.0 + 0.2 * box.index, 0.0, PARK_Z, 1.0, 0.0, 0.0, 0.0)
         d.qvel[va : va + 6] = 0.0

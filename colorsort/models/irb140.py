@@ -11,24 +11,24 @@ import numpy as np
 from robosuite.models.robots.manipulators.manipulator_model import ManipulatorModel
 from robosuite.robots import ROBOT_CLASS_MAPPING, FixedBaseRobot
 
+from colorsort.config import ROBOT_HOMES
 from colorsort.paths import asset_path
 
 # Standard DH rows (d [m], a [m], alpha [rad], theta offset [rad]) from the IRB 140 product
-# specification and the ROS-Industrial abb_irb140 description. theta_i = q_i + offset_i.
+# specification and the ROS-Industrial abb_irb140 description. theta_i = q_i + offset_i;
+# with these offsets ABB's joint signs and zero pose hold.
 DH_TABLE: tuple[tuple[float, float, float, float], ...] = (
     (0.352, 0.070, -np.pi / 2, 0.0),
     (0.0, 0.360, 0.0, -np.pi / 2),
     (0.0, 0.0, -np.pi / 2, 0.0),
     (0.380, 0.0, np.pi / 2, 0.0),
     (0.0, 0.0, -np.pi / 2, 0.0),
-    (0.065, 0.0, 0.0, 0.0),
+    (0.065, 0.0, 0.0, np.pi),  # pi: the flange frame is ABB's tool0 (x down in the calibration pose)
 )
-# Sign of each joint's rotation in the DH frames relative to ABB's positive direction.
-DH_SIGNS = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
 
 JOINT_LIMITS_DEG = np.array([[-180, 180], [-90, 110], [-230, 50], [-200, 200], [-115, 115], [-400, 400]], float)
 JOINT_SPEED_LIMITS_DEG_S = np.array([200, 200, 260, 360, 360, 450], float)
-HOME_QPOS = np.array([0.0, 0.0, 0.0, 0.0, np.pi / 2, 0.0])  # forearm level, flange pointing down
+HOME_QPOS = np.array(ROBOT_HOMES["IRB140"])  # forearm level, flange pointing down
 
 
 def dh_forward_kinematics(q: np.ndarray) -> np.ndarray:
@@ -41,8 +41,8 @@ def dh_forward_kinematics(q: np.ndarray) -> np.ndarray:
         4x4 homogeneous transform of the flange (z along the flange normal).
     """
     T = np.eye(4)
-    for (d, a, alpha, offset), sign, qi in zip(DH_TABLE, DH_SIGNS, q):
-        theta = sign * qi + offset
+    for (d, a, alpha, offset), qi in zip(DH_TABLE, q):
+        theta = qi + offset
         ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
         T = T @ np.array(
             [

@@ -1,8 +1,11 @@
 """A vacuum cup as a robosuite ``GripperModel``.
 
-Suction is MuJoCo's ``adhesion`` actuator on the cup body: it adds an attracting normal force
-to the contacts the cup pad already has, so the cup can only hold what it touches (no grasping
-through the air, no welds, no reparenting) and lets go the physics step after the command drops.
+Suction is MuJoCo physics in two parts. The ``adhesion`` actuator on the cup body adds an
+attracting normal force to the contacts the cup pad already has, so the cup only acts on what
+it touches (nothing is grasped through the air). Once the pad lies flat on a box face the
+vacuum seals: ``colorsort.suction.VacuumSeal`` switches on a weld equality at the pose the two
+bodies have (no teleporting, no reparenting), and switches it off the physics step after the
+command drops, so a released box falls at once.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ from robosuite.models.grippers import GRIPPER_MAPPING, GripperModel
 
 from colorsort.paths import asset_path
 
-SUCTION_FORCE_N = 60.0  # adhesion gain at full command, mirrored from the MJCF for documentation
+SUCTION_FORCE_N = 20.0  # adhesion gain at full command, mirrored from the MJCF for documentation
 CUP_LENGTH_M = 0.095  # flange face to cup pad face
 
 

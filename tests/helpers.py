@@ -1,0 +1,81 @@
+"""Test helpers: a small damped-least-squares IK and motion driver for the arm.
+
+The expert's planner (mink + ruckig) is the product's IK; these helpers only put the cup where
+a physics test needs it, with as little machinery as possible.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from colorsort.env import ColorSort
+
+CUP_DOWN = np.array([0.0, 0.0, -1.0])  # world direction of the cup's approach axis when picking
+
+
+def arm_joint_ids(env: ColorSort) -> tuple[np.ndarray, np.ndarray]:
+    """(qpos addresses, dof addresses) of the arm's joints."""
+    robot = env.robots[0]
+    return np.array(robot._ref_joint_pos_indexes), np.array(robot._ref_joint_vel_indexes)
+
+
+def cup_site(env: ColorSort) -> int:
+    return env.sim.model.site_name2id("gripper0_right_grip_site")
+
+
+def solve_cup_ik(env: ColorSort, target: np.ndarray, q_init: np.ndarray | None = None, iters: int = 300) -> np.ndarray:
+    """Joint angles [rad] that put the cup pad's centre at ``target`` [m], cup facing down."""
+    m = env.sim.model._model
+    d = mujoco.MjData(m)
+    d.qpos[:] = env.sim.data.qpos
+    qadr, dadr = arm_joint_ids(env)
+    if q_init is not None:
+        d.qpos[qadr] = q_init
+    site = cup_site(env)
+    jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    for _ in range(iters):
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        pos_err = target - d.site_xpos[site]
+        z_axis = d.site_xmat[site].reshape(3, 3)[:, 2]
+        rot_err = np.cross(z_axis, CUP_DOWN)
+        err = np.concatenate([pos_err, rot_err])
+        if np.linalg.norm(pos_err) < 1e-5 and np.linalg.norm(rot_err) < 1e-5:
+            break
+        mujoco.mj_jacSite(m, d, jacp, jacr, site)
+        J = np.vstack([jacp[:, dadr], jacr[:, dadr]])
+        dq = J.T @ np.linalg.solve(J @ J.T + 1e-4 * np.eye(6), err)
+        d.qpos[qadr] += dq
+        for k, j in enumerate(env.robots[0].robot_model.joints):
+            jid = m.joint(j).id
+            d.qpos[qadr[k]] = np.clip(d.qpos[qadr[k]], *m.jnt_range[jid])
+    assert np.linalg.norm(pos_err) < 1e-3, f"IK did not reach {target}: error {pos_err}"
+    return d.qpos[qadr].copy()
+
+
+def move_to(env: ColorSort, q_goal: np.ndarray, suction: float, duration: float, settle: float = 0.3, on_step=None):
+    """Drive the arm to ``q_goal`` [rad] along a linear joint path over ``duration`` [s], then settle."""
+    qadr, _ = arm_joint_ids(env)
+    q_start = env.sim.data.qpos[qadr].copy()
+    n_move = max(1, int(round(duration * env.control_freq)))
+    n_settle = int(round(settle * env.control_freq))
+    obs = info = None
+    for k in range(1, n_move + n_settle + 1):
+        s = min(1.0, k / n_move)
+        s = 3 * s**2 - 2 * s**3  # smooth start and stop
+        obs, _, _, info = env.step(np.concatenate([q_start + s * (q_goal - q_start), [suction]]))
+        if on_step is not None:
+            on_step(env)
+    return obs, info
+
+
+def wait_for_box_at_sensor(env: ColorSort, timeout: float = 20.0):
+    """Step with the arm still until the ray sensor sees a box; return that box."""
+    qadr, _ = arm_joint_ids(env)
+    hold = np.concatenate([env.sim.data.qpos[qadr], [-1.0]])
+    for _ in range(int(timeout * env.control_freq)):
+        _, _, _, info = env.step(hold)
+        if info["box_detected"]:
+            return min(env.boxes_in_play(), key=lambda b: env.box_pos(b)[0])
+    raise AssertionError("no box reached the sensor")
