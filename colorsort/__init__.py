@@ -4,13 +4,16 @@ Importing the package registers the ``IRB140`` robot, the ``SuctionGripper`` and
 ``ColorSort`` task with robosuite, so that ``suite.make("ColorSort", robots="IRB140")`` works.
 """
 
-import os
+from colorsort.rendering import ensure_gl_backend, gl_error, is_gl_failure
 
-os.environ.setdefault("MUJOCO_GL", "egl")
+ensure_gl_backend()  # before robosuite imports mujoco's renderer
 
-from colorsort import models  # noqa: E402  (registers IRB140 and SuctionGripper)
+try:
+    from colorsort import models  # registers IRB140 and SuctionGripper
+    from colorsort.env import ColorSort  # registers the task
+except Exception as error:  # robosuite loads its GL context module at import time
+    if is_gl_failure(error):
+        raise gl_error(error) from error
+    raise
 
-__all__ = ["models"]
-from colorsort.env import ColorSort  # noqa: E402  (registers the task with robosuite)
-
-__all__ += ["ColorSort"]
+__all__ = ["ColorSort", "models"]

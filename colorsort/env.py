@@ -37,6 +37,7 @@ from robosuite.utils.observables import Observable, sensor
 from colorsort.config import BIN_COLORS, COLORS, GRIPPERS, ROBOT_HOMES, ROBOTS, CellLayout, TaskConfig, make_config
 from colorsort.models.arena import PARK_Z, ConveyorArena
 from colorsort.paths import asset_path
+from colorsort.rendering import check_gl
 from colorsort.suction import VacuumSeal
 
 logger = logging.getLogger("colorsort")
@@ -84,6 +85,8 @@ class ColorSort(ManipulationEnv):
         layout: the cell's geometry.
         camera_names: any of "scene", "sensor", "wrist".
         control_freq: policy rate [Hz].
+        servo_freq: rate [Hz] at which the arm controller recomputes joint torques, held in
+            between (a drive's servo period); a divisor of the 500 Hz physics rate.
         **overrides: ``TaskConfig`` fields, e.g. ``belt_speed=0.1``.
         Other arguments are robosuite's.
     """
@@ -106,6 +109,7 @@ class ColorSort(ManipulationEnv):
         render_visual_mesh: bool = True,
         render_gpu_device_id: int = -1,
         control_freq: float = 20,
+        servo_freq: float = 100,
         lite_physics: bool = True,
         horizon: int | None = None,
         ignore_done: bool = False,
@@ -143,9 +147,17 @@ class ColorSort(ManipulationEnv):
             controller_configs = load_composite_controller_config(
                 controller=asset_path("controllers", "joint_position_absolute.json")
             )
+        if has_offscreen_renderer:
+            check_gl()
         if horizon is None:
             horizon = int(np.ceil(self.config.time_limit * control_freq))
 
+        physics_hz = 1.0 / 0.002  # robosuite's SIMULATION_TIMESTEP
+        if servo_freq <= 0 or abs(physics_hz / servo_freq - round(physics_hz / servo_freq)) > 1e-9:
+            raise ValueError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, e.g. 100, 250, 500")
+        self._servo_period = int(round(physics_hz / servo_freq))  # physics steps per torque update
+        self._substep = 0
+        self._obs_dt = 0.0
         self.boxes = [Box(i) for i in range(self.config.pool_size)]
         self.tally = Tally()
         self.belt_running = True
@@ -212,6 +224,7 @@ class ColorSort(ManipulationEnv):
     def _setup_references(self) -> None:
         super()._setup_references()
         m = self.sim.model
+        self._data = self.sim.data._data  # raw MjData: no wrapper overhead on the per-step path
         self._belt_qpos = m.get_joint_qpos_addr("belt_slide")
         self._belt_qvel = m.get_joint_qvel_addr("belt_slide")
         self._ray_adr = m.sensor_adr[m.sensor_name2id("ray")]
@@ -296,9 +309,27 @@ class ColorSort(ManipulationEnv):
 
     # ------------------------------------------------------------------ physics step
     def _pre_action(self, action, policy_step=False):
-        super()._pre_action(action, policy_step)
+        if policy_step:
+            self._substep = 0
+        if self._substep % self._servo_period == 0:
+            super()._pre_action(action, policy_step)  # robosuite's controller writes ctrl
+        self._substep += 1
         self._drive_belt()
         self.seal.update()
+
+    def _update_observables(self, force: bool = False) -> None:
+        """Sample every observable once per policy step, at its end, not after every physics step.
+
+        robosuite calls this after each physics step and samples at the start of each policy
+        period; ColorSort samples once, after the last physics step, so observations show the
+        state the step produced (observable delays and corrupters are not used by the task).
+        """
+        self._obs_dt += self.model_timestep
+        substeps = int(round(self.control_timestep / self.model_timestep))
+        if force or self._substep >= substeps:
+            for observable in self._observables.values():
+                observable.update(timestep=self._obs_dt, obs_cache=self._obs_cache, force=True)
+            self._obs_dt = 0.0
 
     def _drive_belt(self) -> None:
         """Run or stop the belt from the ray sensor, once per physics step.
@@ -306,11 +337,12 @@ class ColorSort(ManipulationEnv):
         The belt joint's velocity is the surface speed; its position is held at 0, so the
         belt never travels (see ``models/arena.py``).
         """
-        distance = self.sim.data.sensordata[self._ray_adr]
+        d = self._data
+        distance = d.sensordata[self._ray_adr]
         self.box_detected = bool(0.0 <= distance <= self.layout.sensor_range)
         self.belt_running = not self.box_detected
-        self.sim.data.qpos[self._belt_qpos] = 0.0
-        self.sim.data.qvel[self._belt_qvel] = -self.config.belt_speed if self.belt_running else 0.0
+        d.qpos[self._belt_qpos] = 0.0
+        d.qvel[self._belt_qvel] = -self.config.belt_speed if self.belt_running else 0.0
 
     def _post_action(self, action):
         self._step_reward = self._update_boxes()

@@ -121,8 +121,8 @@ class ConveyorArena(Arena):
 
     def _add_cameras(self) -> None:
         L = self.layout
-        scene_pos = np.array([2.0, -1.7, 1.55])
-        scene_target = np.array([0.55, -0.05, 0.30])
+        scene_pos = np.array([1.65, -1.45, 1.30])
+        scene_target = np.array([0.50, -0.05, 0.32])
         px, py, pz = L.pick_point
         sensor_cam = np.array([px, py, L.belt_top_z + 0.55])
         for name, pos, quat, fovy in (

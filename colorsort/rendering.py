@@ -1,0 +1,46 @@
+"""Headless rendering: pick a GL backend, fail with a useful message when none loads."""
+
+from __future__ import annotations
+
+import os
+
+GL_HELP = (
+    "MuJoCo could not create an OpenGL context for off-screen rendering (MUJOCO_GL={backend!r}): {error}\n"
+    "ColorSort renders headless with MUJOCO_GL=egl (Mesa's software EGL works without a GPU; on Debian/Ubuntu: "
+    "apt-get install libegl1 libgl1-mesa-dri) or MUJOCO_GL=osmesa (apt-get install libosmesa6). "
+    "To run without images, pass has_offscreen_renderer=False and use_camera_obs=False."
+)
+
+
+def ensure_gl_backend() -> None:
+    """Default ``MUJOCO_GL`` to ``egl`` (headless) unless the user chose a backend."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+
+
+def is_gl_failure(error: BaseException) -> bool:
+    """Whether an exception was raised inside an OpenGL binding or MuJoCo's GL context code."""
+    tb = error.__traceback__
+    while tb is not None:
+        filename = tb.tb_frame.f_code.co_filename.replace("\\", "/")
+        if "/OpenGL/" in filename or "/mujoco/egl/" in filename or "/mujoco/osmesa/" in filename or "_context" in filename:
+            return True
+        tb = tb.tb_next
+    return False
+
+
+def gl_error(error: BaseException) -> RuntimeError:
+    """A ``RuntimeError`` that explains how to get a GL backend, wrapping ``error``."""
+    return RuntimeError(GL_HELP.format(backend=os.environ.get("MUJOCO_GL"), error=error))
+
+
+def check_gl() -> None:
+    """Render one pixel with MuJoCo; raise ``RuntimeError`` with set-up advice if that fails."""
+    try:
+        import mujoco
+
+        model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
+        with mujoco.Renderer(model, 8, 8) as renderer:
+            renderer.update_scene(mujoco.MjData(model))
+            renderer.render()
+    except Exception as error:  # the backends raise ImportError, AttributeError, RuntimeError, mujoco.FatalError
+        raise gl_error(error) from error

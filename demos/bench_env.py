@@ -1,0 +1,68 @@
+"""Speed of the ColorSort env, measured side by side in one run on one compiled model.
+
+    python demos/bench_env.py [--robot IRB140] [--seconds 3]
+
+Prints raw ``mujoco.mj_step`` steps/s, the env's physics steps/s through ``env.step`` (the
+controller, belt, seal and bookkeeping included), their ratio, and frames/s of each camera at
+128x128 and 480x640. Both loops run the same scene: the arm holding its home pose, boxes riding
+the belt and queueing at the sensor.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import time
+
+import mujoco
+import numpy as np
+import robosuite as suite
+
+import colorsort  # noqa: F401
+from colorsort.env import CAMERAS, WRIST_CAMERA_MJCF
+
+
+def timed(fn, seconds: float) -> float:
+    """Calls of ``fn`` per second over about ``seconds`` [s] of wall time."""
+    n, start = 0, time.perf_counter()
+    while (elapsed := time.perf_counter() - start) < seconds:
+        fn()
+        n += 1
+    return n / elapsed
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--robot", default="IRB140")
+    p.add_argument("--seconds", type=float, default=3.0, help="wall time per measurement [s]")
+    args = p.parse_args()
+
+    env = suite.make("ColorSort", robots=args.robot, seed=0, ignore_done=True, has_offscreen_renderer=True)
+    env.reset()
+    hold = np.concatenate([env.robots[0].init_qpos, [-1.0]])
+    for _ in range(100):  # warm up; boxes on the belt
+        env.step(hold)
+    substeps = int(round(env.control_timestep / env.model_timestep))
+
+    # Raw physics on a copy of the same compiled model and state, controls frozen.
+    model = env.sim.model._model
+    data = copy.copy(env.sim.data._data)
+    raw = timed(lambda: mujoco.mj_step(model, data), args.seconds)
+    env_rate = timed(lambda: env.step(hold), args.seconds) * substeps
+
+    print(f"{'measure':<34}{'value':>12}")
+    print(f"{'raw mj_step [steps/s]':<34}{raw:>12,.0f}")
+    print(f"{'env.step physics [steps/s]':<34}{env_rate:>12,.0f}")
+    print(f"{'env / raw':<34}{env_rate / raw:>12.2f}")
+    print(f"{'env real-time factor':<34}{env_rate * env.model_timestep:>12.1f}")
+    for h, w in ((128, 128), (480, 640)):
+        for cam in CAMERAS:
+            name = WRIST_CAMERA_MJCF if cam == "wrist" else cam
+            env.sim.render(camera_name=name, width=w, height=h)  # allocate buffers
+            fps = timed(lambda: env.sim.render(camera_name=name, width=w, height=h), args.seconds / 2)
+            print(f"{f'{cam} camera {h}x{w} [frames/s]':<34}{fps:>12.1f}")
+    env.close()
+
+
+if __name__ == "__main__":
+    main()

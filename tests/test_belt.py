@@ -1,0 +1,70 @@
+"""The conveyor: carries boxes at its speed by friction, stops for the ray sensor, restarts."""
+
+import numpy as np
+import pytest
+from conftest import make_env
+from helpers import wait_for_box_at_sensor
+
+
+def hold_action(env):
+    return np.concatenate([env.robots[0].init_qpos, [-1.0]])
+
+
+@pytest.mark.parametrize("speed", [0.05, 0.2])
+def test_belt_carries_box_at_its_speed_without_spinning(speed):
+    env = make_env(belt_speed=speed, spawn_period=100.0)
+    env.reset()
+    (box,) = env.boxes_in_play()
+    for _ in range(10):  # let it settle onto the belt and come up to speed
+        env.step(hold_action(env))
+    x0, t0 = env.box_pos(box), env.cur_time
+    quat0 = env.sim.data.body_xquat[env._box_body[box.index]].copy()
+    for _ in range(40):  # 2 s
+        env.step(hold_action(env))
+    x1 = env.box_pos(box)
+    v = (x1 - x0) / (env.cur_time - t0)
+    assert -v[0] == pytest.approx(speed, rel=0.05)
+    assert abs(v[1]) < 1e-3 and abs(v[2]) < 1e-3
+    quat1 = env.sim.data.body_xquat[env._box_body[box.index]]
+    assert abs(abs(quat0 @ quat1) - 1.0) < 1e-4  # no rotation
+    env.close()
+
+
+def test_belt_stops_when_ray_blocked_and_restarts_when_clear(env):
+    box = wait_for_box_at_sensor(env)
+    for _ in range(5):  # friction brings it to rest within a few mm
+        env.step(hold_action(env))
+    stop_x = env.box_pos(box)[0]
+    # The box stopped with its leading face at the ray.
+    assert stop_x - env.layout.box_size / 2 == pytest.approx(env.layout.sensor_x, abs=0.005)
+    for _ in range(20):
+        _, _, _, info = env.step(hold_action(env))
+    assert not info["belt_running"] and info["box_detected"]
+    assert env.box_pos(box)[0] == pytest.approx(stop_x, abs=1e-4)
+    followers = [b for b in env.boxes_in_play() if b is not box]
+    before = [env.box_pos(b)[0] for b in followers]
+    env._park(box)  # take the box away: the ray clears
+    obs, _, _, info = env.step(hold_action(env))
+    assert info["belt_running"] and not info["box_detected"]
+    assert float(obs["belt_running"]) == 1.0
+    for _ in range(10):
+        env.step(hold_action(env))
+    after = [env.box_pos(b)[0] for b in followers]
+    assert followers and all(a < b - 0.05 for a, b in zip(after, before))  # the queue moves on
+
+
+def test_box_riding_past_the_end_is_dropped():
+    env = make_env(spawn_period=100.0)
+    env.reset()
+    (box,) = env.boxes_in_play()
+    L = env.layout
+    qa = env._box_qpos[box.index]
+    env.sim.data.qpos[qa : qa + 3] = (L.belt_end_x + 0.03, L.belt_y, L.belt_top_z + 0.05)  # downstream of the ray
+    env.sim.forward()
+    dropped = 0
+    for _ in range(40):
+        _, r, _, info = env.step(hold_action(env))
+        dropped += r < 0
+    assert info["dropped"] == 1 and dropped == 1
+    assert box not in env.boxes_in_play()
+    env.close()
