@@ -44,7 +44,7 @@ setup(
     # The top-level assets/ folder ships inside the wheel as the package colorsort.assets.
     packages=find_packages(include=["colorsort", "colorsort.*"]) + ["colorsort.assets"],
     package_dir={"colorsort.assets": "assets"},
-    package_data={"colorsort.assets": ["*.md", "**/*.xml", "**/*.md", "**/*.stl", "**/*.png"]},
+    package_data={"colorsort.assets": ["*.md", "**/*.xml", "**/*.md", "**/*.json", "**/*.stl", "**/*.png"]},
     install_requires=INSTALL_REQUIRES,
     extras_require=EXTRAS_REQUIRE,
     entry_points={"console_scripts": ["colorsort-demo=colorsort.demo:main"]},
