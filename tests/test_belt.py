@@ -68,3 +68,16 @@ def test_box_riding_past_the_end_is_dropped():
     assert info["dropped"] == 1 and dropped == 1
     assert box not in env.boxes_in_play()
     env.close()
+
+
+def test_spawner_waits_when_the_pool_is_empty():
+    env = make_env(pool_size=2, spawn_period=0.5)
+    env.reset()
+    for _ in range(int(8 / env.control_timestep)):  # 8 s: 16 boxes due, 2 in the pool
+        _, _, _, info = env.step(hold_action(env))
+    assert info["spawned"] == 2 and len(env.boxes_in_play()) == 2
+    env._park(env.boxes_in_play()[0])  # one returns to the pool
+    for _ in range(int(1 / env.control_timestep)):
+        _, _, _, info = env.step(hold_action(env))
+    assert info["spawned"] == 3
+    env.close()
