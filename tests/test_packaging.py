@@ -1,6 +1,7 @@
 """The package installs without -e: the wheel carries the MJCF assets, and they load from it."""
 
 import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -22,10 +23,12 @@ ASSETS = [
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("wheel")
-    build = tmp_path_factory.mktemp("build")
+    # Build from a copy: setuptools writes build/ and *.egg-info next to the sources.
+    src = tmp_path_factory.mktemp("src") / "colorsort"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(".venv", ".git", "build", "*.egg-info", "outputs", "datasets"))
     subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(out), str(ROOT)],
-        check=True, cwd=build, env={**os.environ, "PIP_NO_INDEX": "1"},
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(out), str(src)],
+        check=True, env={**os.environ, "PIP_NO_INDEX": "1"},
     )
     (whl,) = out.glob("colorsort-*.whl")
     return whl
