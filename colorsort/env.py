@@ -28,6 +28,7 @@ from typing import Any
 
 import mujoco
 import numpy as np
+from robosuite import macros
 from robosuite.controllers import load_composite_controller_config
 from robosuite.environments.manipulation.manipulation_env import ManipulationEnv
 from robosuite.models.tasks import ManipulationTask
@@ -152,7 +153,7 @@ class ColorSort(ManipulationEnv):
         if horizon is None:
             horizon = int(np.ceil(self.config.time_limit * control_freq))
 
-        physics_hz = 1.0 / 0.002  # robosuite's SIMULATION_TIMESTEP
+        physics_hz = 1.0 / macros.SIMULATION_TIMESTEP
         if servo_freq <= 0 or abs(physics_hz / servo_freq - round(physics_hz / servo_freq)) > 1e-9:
             raise ValueError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, e.g. 100, 250, 500")
         self._servo_period = int(round(physics_hz / servo_freq))  # physics steps per torque update

@@ -71,7 +71,7 @@ def test_home_pose_holds_still_under_gravity(env):
 def test_suction_gripper_mounts_on_robosuite_arms(robot):
     env = make_env(robot)
     obs = env.reset()
-    assert env.action_dim == 8 if robot == "Panda" else 7
+    assert env.action_dim == (8 if robot == "Panda" else 7)  # joints + suction
     assert type(env.robots[0].gripper["right"]).__name__ == "SuctionGripper"
     q = obs["robot0_joint_pos"]
     for _ in range(20):
