@@ -36,7 +36,7 @@ from robosuite.utils.mjcf_utils import new_element
 from robosuite.utils.observables import Observable, sensor
 
 from colorsort.config import BIN_COLORS, COLORS, GRIPPERS, ROBOT_HOMES, ROBOTS, CellLayout, TaskConfig, make_config
-from colorsort.models.arena import PARK_Z, ConveyorArena
+from colorsort.models.arena import ConveyorArena, park_position
 from colorsort.paths import asset_path
 from colorsort.rendering import check_gl
 from colorsort.suction import VacuumSeal
@@ -447,7 +447,7 @@ class ColorSort(ManipulationEnv):
         m, d = self.sim.model, self.sim.data
         self.seal.release(box.index)
         qa, va = self._box_qpos[box.index], self._box_qvel[box.index]
-        d.qpos[qa : qa + 7] = (3.0 + 0.2 * box.index, 0.0, PARK_Z, 1.0, 0.0, 0.0, 0.0)
+        d.qpos[qa : qa + 7] = (*park_position(box.index), 1.0, 0.0, 0.0, 0.0)
         d.qvel[va : va + 6] = 0.0
         self._set_collidable(box, False)
         m.body_gravcomp[self._box_body[box.index]] = 1.0

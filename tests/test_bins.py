@@ -3,7 +3,6 @@
 import logging
 
 import numpy as np
-import pytest
 from conftest import make_env
 
 from colorsort.config import BIN_COLORS
@@ -83,9 +82,8 @@ def test_full_bin_is_emptied_and_logged(caplog):
     assert all(z < -1.0 for z in parked_z)
 
 
-@pytest.mark.parametrize("capacity", [1])
-def test_capacity_one_empties_every_box(capacity):
-    env = make_env(spawn_period=100.0, bin_capacity=capacity)
+def test_capacity_one_empties_every_box():
+    env = make_env(spawn_period=100.0, bin_capacity=1)
     env.reset()
     box = the_box(env, "red")
     drop_into_bin(env, box, "red")

@@ -23,6 +23,11 @@ BELT_MASS_KG = 50.0  # heavy, so contact impulses within one step barely change 
 PARK_Z = -2.0  # parked boxes wait this far below the floor
 
 
+def park_position(index: int) -> tuple[float, float, float]:
+    """Where pooled box ``index`` waits while parked [m]: in a row below the floor."""
+    return (3.0 + 0.2 * index, 0.0, PARK_Z)
+
+
 def look_at_quat(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
     """MuJoCo (w, x, y, z) quaternion of a camera at ``pos`` looking at ``target``, z up."""
     forward = np.asarray(target, float) - np.asarray(pos, float)
@@ -136,7 +141,7 @@ class ConveyorArena(Arena):
         for i, name in enumerate(self.box_names):
             # gravcomp="1" at compile time keeps MuJoCo's gravity-compensation pass enabled;
             # the task switches it off per box while the box is in play.
-            body = new_body(name=name, pos=(3.0 + 0.2 * i, 0.0, PARK_Z), gravcomp="1")
+            body = new_body(name=name, pos=park_position(i), gravcomp="1")
             inertia = box_mass * self.layout.box_size**2 / 6  # solid cube
             body.append(new_element("inertial", None, pos=(0, 0, 0), mass=box_mass, diaginertia=(inertia,) * 3))
             body.append(new_joint(name=f"{name}_joint", type="free", damping="0"))
