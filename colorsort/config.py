@@ -28,6 +28,14 @@ ROBOT_HOMES: dict[str, tuple[float, ...]] = {
     "UR5e": (-0.3024, -1.6395, 1.2246, -1.1559, -1.5708, -0.3023),
 }
 
+# Maximum joint speeds [rad/s] from the makers' datasheets: ABB IRB 140 (200, 200, 260, 360, 360,
+# 450 deg/s), Franka Emika Panda, Universal Robots UR5e (180 deg/s on every joint).
+ROBOT_JOINT_SPEEDS: dict[str, tuple[float, ...]] = {
+    "IRB140": (3.4907, 3.4907, 4.5379, 6.2832, 6.2832, 7.8540),
+    "Panda": (2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61),
+    "UR5e": (3.1416, 3.1416, 3.1416, 3.1416, 3.1416, 3.1416),
+}
+
 
 @dataclass(frozen=True)
 class CellLayout:
@@ -78,7 +86,7 @@ class TaskConfig:
     bin_capacity: int = 4  # boxes a bin holds before it is emptied
     boxes_to_sort: int = 5  # correctly placed boxes that make an episode a success
     box_colors: tuple[str, ...] = BIN_COLORS  # colours drawn (uniformly) for new boxes
-    pool_size: int = 8  # boxes allocated when the model is built
+    pool_size: int = 16  # boxes allocated when the model is built (in bins, on the belt, in the cup)
     lateral_jitter: float = 0.0  # [m] max |offset| of a new box from the belt centre line
     yaw_jitter: float = 0.0  # [deg] max |yaw| of a new box
     box_mass: float = 0.5  # [kg]
@@ -94,6 +102,14 @@ class TaskConfig:
         _check_range("yaw_jitter", self.yaw_jitter, 0.0, 45.0)
         _check_range("box_mass", self.box_mass, 0.05, 5.0)
         _check_range("time_limit", self.time_limit, 1.0, 36_000.0)
+        # Bins hold up to bin_capacity - 1 boxes each between emptyings; with fewer boxes than
+        # that plus two, the pool could end up entirely in bins and the spawner would starve.
+        min_pool = len(BIN_COLORS) * (self.bin_capacity - 1) + 2
+        if self.pool_size < min_pool:
+            raise ValueError(
+                f"pool_size={self.pool_size} is too small for bin_capacity={self.bin_capacity}: "
+                f"valid values lie in [{min_pool}, 64] (3 bins x (capacity - 1) + 2)"
+            )
         if isinstance(self.box_colors, str) or not self.box_colors:
             raise ValueError(f"box_colors must be a non-empty tuple of colours from {sorted(COLORS)}")
         unknown = [c for c in self.box_colors if c not in COLORS]

@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     frame = None
     with VideoWriter(video_path, fps=env.control_freq) as video:
         for _ in tqdm(range(steps), desc="simulating", unit="step"):
-            _, _, _, info = env.step(np.concatenate([sweep_target(env.cur_time), [-1.0]]))
+            _, _, _, info = env.step(np.concatenate([sweep_target(env.cur_time), [-1.0, -1.0]]))
             frame = env.sim.render(camera_name="scene", width=args.width, height=args.height)[::-1]
             video.write(frame)
     save_png(still_path, frame)

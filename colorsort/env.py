@@ -2,12 +2,16 @@
 
 Spec sheet
 ----------
-Action (7,): absolute joint position targets for the arm's six joints [rad], then suction in
-    [-1, 1] (> 0 is on). Other ``controller_configs`` change the arm part as in robosuite.
+Action (8,) for the IRB 140: absolute joint position targets for the arm's six joints [rad],
+    suction in [-1, 1] (> 0 is on), then belt pass in [-1, 1] (> 0 runs the belt even while
+    the ray sensor sees a box: how a box with no bin is let through). Other
+    ``controller_configs`` change the arm part as in robosuite; Panda has 7 joints, so 9.
 Observations: robosuite proprioception (``robot0_joint_pos``, ``robot0_eef_pos``, ...);
-    ``box_detected`` and ``belt_running`` (1.0 or 0.0); with ``use_camera_obs`` the images
+    ``box_detected``, ``belt_running`` and ``suction_sealed`` (the cup's vacuum switch) as 1.0
+    or 0.0; with ``use_camera_obs`` the images
     ``scene_image``, ``sensor_image``, ``wrist_image`` (H, W, 3) uint8, right side up.
-Belt: carries boxes toward the arm at ``belt_speed`` [m/s]; stops while the ray is blocked.
+Belt: carries boxes toward the arm at ``belt_speed`` [m/s]; stops while the ray is blocked,
+    unless the belt-pass command is on.
 Spawner: a box from the pool every ``spawn_period`` [s] at the belt's upstream end, colour
     drawn from ``box_colors`` by the env's seeded generator, optional lateral and yaw jitter;
     waits while the pool is empty or the spawn point is occupied.
@@ -163,6 +167,8 @@ class ColorSort(ManipulationEnv):
         self.tally = Tally()
         self.belt_running = True
         self.box_detected = False
+        self.belt_pass = False
+        self._arm_action = np.zeros(0)
         self._next_spawn_time = 0.0
         self._step_reward = 0.0
 
@@ -221,6 +227,13 @@ class ColorSort(ManipulationEnv):
             quality = visual.makeelement("quality", {})
             visual.append(quality)
         quality.set("offsamples", "0")
+        # A dim headlight without glare: MuJoCo's default (diffuse 0.4, specular 0.5) shines
+        # straight down the sensor camera's axis and washes box colours out to pastel.
+        headlight = visual.find("headlight")
+        if headlight is None:
+            headlight = visual.makeelement("headlight", {})
+            visual.append(headlight)
+        headlight.attrib.update(ambient="0.15 0.15 0.15", diffuse="0.15 0.15 0.15", specular="0 0 0")
 
     def _setup_references(self) -> None:
         super()._setup_references()
@@ -279,7 +292,11 @@ class ColorSort(ManipulationEnv):
         def belt_running(obs_cache):
             return np.array([float(self.belt_running)])
 
-        for s in (box_detected, belt_running):
+        @sensor(modality="object")
+        def suction_sealed(obs_cache):
+            return np.array([float(self.seal.held is not None)])
+
+        for s in (box_detected, belt_running, suction_sealed):
             observables[s.__name__] = Observable(name=s.__name__, sensor=s, sampling_rate=self.control_freq)
         return observables
 
@@ -303,17 +320,33 @@ class ColorSort(ManipulationEnv):
         self.sim.data.qvel[self._belt_qvel] = 0.0
         self.belt_running = True
         self.box_detected = False
+        self.belt_pass = False
         self._next_spawn_time = 0.0
         self._step_reward = 0.0
         self._spawn_if_due()
         self.sim.forward()
 
     # ------------------------------------------------------------------ physics step
+    @property
+    def action_dim(self) -> int:
+        """The robot's action (arm controller, then suction) plus the belt-pass command."""
+        return self._action_dim + 1
+
+    @property
+    def action_spec(self) -> tuple[np.ndarray, np.ndarray]:
+        low, high = super().action_spec
+        return np.append(low, -1.0), np.append(high, 1.0)
+
     def _pre_action(self, action, policy_step=False):
         if policy_step:
+            action = np.asarray(action, dtype=float)
+            if action.shape != (self.action_dim,):
+                raise ValueError(f"Expected an action of shape ({self.action_dim},), got {action.shape}")
             self._substep = 0
+            self._arm_action = action[:-1]
+            self.belt_pass = bool(action[-1] > 0.0)
         if self._substep % self._servo_period == 0:
-            super()._pre_action(action, policy_step)  # robosuite's controller writes ctrl
+            self.robots[0].control(self._arm_action, policy_step=policy_step)  # robosuite's controller writes ctrl
         self._substep += 1
         self._drive_belt()
         self.seal.update()
@@ -333,7 +366,7 @@ class ColorSort(ManipulationEnv):
             self._obs_dt = 0.0
 
     def _drive_belt(self) -> None:
-        """Run or stop the belt from the ray sensor, once per physics step.
+        """Run or stop the belt from the ray sensor (and the belt-pass command), once per physics step.
 
         The belt joint's velocity is the surface speed; its position is held at 0, so the
         belt never travels (see ``models/arena.py``).
@@ -341,7 +374,7 @@ class ColorSort(ManipulationEnv):
         d = self._data
         distance = d.sensordata[self._ray_adr]
         self.box_detected = bool(0.0 <= distance <= self.layout.sensor_range)
-        self.belt_running = not self.box_detected
+        self.belt_running = self.belt_pass or not self.box_detected
         d.qpos[self._belt_qpos] = 0.0
         d.qvel[self._belt_qvel] = -self.config.belt_speed if self.belt_running else 0.0
 
@@ -469,20 +502,41 @@ class ColorSort(ManipulationEnv):
             return  # wait: try again next step
         L, cfg = self.layout, self.config
         box = parked[0]
-        box.color = str(self.rng.choice(cfg.box_colors))
+        color = str(self.rng.choice(cfg.box_colors))
         dy = self.rng.uniform(-cfg.lateral_jitter, cfg.lateral_jitter)
         yaw = np.deg2rad(self.rng.uniform(-cfg.yaw_jitter, cfg.yaw_jitter))
+        self._place(box, color, L.spawn_x, L.belt_y + dy, yaw)
+        self.tally.spawned += 1
+        self._next_spawn_time = self.cur_time + cfg.spawn_period
+
+    def put_box(self, color: str, x: float, y: float, yaw: float = 0.0) -> Box:
+        """Take a box from the pool and set it down on the belt, centred at (x, y) [m], turned ``yaw`` [rad].
+
+        For tests and benchmarks that need a box at a given place; the spawner does this in play.
+
+        Raises:
+            ValueError: unknown colour. RuntimeError: the pool is empty.
+        """
+        if color not in COLORS:
+            raise ValueError(f"Unknown colour {color!r}. Valid colours: {sorted(COLORS)}")
+        parked = [b for b in self.boxes if b.status is BoxStatus.PARKED]
+        if not parked:
+            raise RuntimeError(f"All {len(self.boxes)} boxes of the pool are in play")
+        self._place(parked[0], color, x, y, yaw)
+        self.sim.forward()
+        return parked[0]
+
+    def _place(self, box: Box, color: str, x: float, y: float, yaw: float) -> None:
+        L = self.layout
         m, d = self.sim.model, self.sim.data
         qa, va = self._box_qpos[box.index], self._box_qvel[box.index]
         z = L.belt_top_z + L.box_size / 2 + 0.002
-        d.qpos[qa : qa + 7] = (L.spawn_x, L.belt_y + dy, z, np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2))
+        d.qpos[qa : qa + 7] = (x, y, z, np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2))
         d.qvel[va : va + 6] = 0.0
-        m.geom_rgba[self._box_geom[box.index]] = COLORS[box.color]
+        m.geom_rgba[self._box_geom[box.index]] = COLORS[color]
         self._set_collidable(box, True)
         m.body_gravcomp[self._box_body[box.index]] = 0.0
-        box.status, box.bin = BoxStatus.IN_PLAY, None
-        self.tally.spawned += 1
-        self._next_spawn_time = self.cur_time + cfg.spawn_period
+        box.color, box.status, box.bin = color, BoxStatus.IN_PLAY, None
 
     def _spawn_point_clear(self) -> bool:
         L = self.layout

@@ -64,7 +64,7 @@ def move_to(env: ColorSort, q_goal: np.ndarray, suction: float, duration: float,
     for k in range(1, n_move + n_settle + 1):
         s = min(1.0, k / n_move)
         s = 3 * s**2 - 2 * s**3  # smooth start and stop
-        obs, _, _, info = env.step(np.concatenate([q_start + s * (q_goal - q_start), [suction]]))
+        obs, _, _, info = env.step(np.concatenate([q_start + s * (q_goal - q_start), [suction, -1.0]]))
         if on_step is not None:
             on_step(env)
     return obs, info
@@ -73,7 +73,7 @@ def move_to(env: ColorSort, q_goal: np.ndarray, suction: float, duration: float,
 def wait_for_box_at_sensor(env: ColorSort, timeout: float = 20.0):
     """Step with the arm still until the ray sensor sees a box; return that box."""
     qadr, _ = arm_joint_ids(env)
-    hold = np.concatenate([env.sim.data.qpos[qadr], [-1.0]])
+    hold = np.concatenate([env.sim.data.qpos[qadr], [-1.0, -1.0]])
     for _ in range(int(timeout * env.control_freq)):
         _, _, _, info = env.step(hold)
         if info["box_detected"]:

@@ -7,7 +7,7 @@ from helpers import wait_for_box_at_sensor
 
 
 def hold_action(env):
-    return np.concatenate([env.robots[0].init_qpos, [-1.0]])
+    return np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]])
 
 
 @pytest.mark.parametrize("speed", [0.05, 0.2])
@@ -71,7 +71,7 @@ def test_box_riding_past_the_end_is_dropped():
 
 
 def test_spawner_waits_when_the_pool_is_empty():
-    env = make_env(pool_size=2, spawn_period=0.5)
+    env = make_env(pool_size=2, bin_capacity=1, spawn_period=0.5)
     env.reset()
     for _ in range(int(8 / env.control_timestep)):  # 8 s: 16 boxes due, 2 in the pool
         _, _, _, info = env.step(hold_action(env))
@@ -80,4 +80,24 @@ def test_spawner_waits_when_the_pool_is_empty():
     for _ in range(int(1 / env.control_timestep)):
         _, _, _, info = env.step(hold_action(env))
     assert info["spawned"] == 3
+    env.close()
+
+
+def test_belt_pass_lets_a_box_without_a_bin_through_as_rejected():
+    env = make_env(box_colors=("yellow",), spawn_period=100.0)
+    env.reset()
+    box = wait_for_box_at_sensor(env)
+    for _ in range(10):
+        _, _, _, info = env.step(hold_action(env))
+    assert not info["belt_running"]  # the ray holds it
+    passing = hold_action(env)
+    passing[-1] = 1.0
+    rejected = 0
+    for _ in range(int(3 / env.control_timestep)):  # 0.25 m to the end at 0.2 m/s, then the fall
+        _, reward, _, info = env.step(passing)
+        rejected = info["rejected"]
+        if rejected:
+            break
+    assert rejected == 1 and info["dropped"] == 0 and reward == 0.0
+    assert box not in env.boxes_in_play()
     env.close()

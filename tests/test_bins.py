@@ -18,7 +18,7 @@ def drop_into_bin(env, box, color: str, height: float = 0.45):
 
 
 def run(env, seconds: float):
-    hold = np.concatenate([env.robots[0].init_qpos, [-1.0]])
+    hold = np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]])
     rewards, info = [], None
     for _ in range(int(seconds * env.control_freq)):
         _, r, _, info = env.step(hold)

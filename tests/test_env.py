@@ -16,6 +16,7 @@ from colorsort.config import PRESETS, ROBOTS, TaskConfig, make_config
         ({"preset": "turbo"}, "Valid presets"),
         ({"box_colors": ("red", "pink")}, "Valid colours"),
         ({"bin_capacity": 0}, "bin_capacity"),
+        ({"bin_capacity": 6, "pool_size": 8}, "pool_size"),
         ({"robots": "Sawyer"}, "Valid robots"),
         ({"gripper_types": "PandaGripper"}, "Valid grippers"),
         ({"belt_sped": 0.1}, "Valid fields"),
@@ -43,7 +44,7 @@ def test_presets_and_overrides():
 def rollout(seed: int, steps: int = 60):
     env = make_env(seed=seed, spawn_period=0.5, lateral_jitter=0.03, yaw_jitter=20.0)
     env.reset()
-    actions = np.random.default_rng(123).uniform(-0.2, 0.2, (steps, 7)) + np.r_[env.robots[0].init_qpos, 0]
+    actions = np.random.default_rng(123).uniform(-0.2, 0.2, (steps, 8)) + np.r_[env.robots[0].init_qpos, 0, -1]
     for a in actions:
         env.step(a)
     state = env.sim.get_state().flatten()
@@ -81,7 +82,7 @@ def test_random_actions_for_1s_no_warnings_no_nan(robot, preset):
 def test_other_robots_run_the_cell(robot):
     env = make_env(robot)
     env.reset()
-    hold = np.concatenate([env.robots[0].init_qpos, [-1.0]])
+    hold = np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]])
     for _ in range(int(6 / env.control_timestep)):
         _, _, _, info = env.step(hold)
     assert info["box_detected"] and not info["belt_running"]
@@ -93,7 +94,7 @@ def test_info_keys_and_success():
     env = make_env(boxes_to_sort=1, spawn_period=100.0, ignore_done=False)
     env.reset()
     (box,) = env.boxes_in_play()
-    _, _, done, info = env.step(np.concatenate([env.robots[0].init_qpos, [-1.0]]))
+    _, _, done, info = env.step(np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]]))
     for key in ("belt_running", "box_detected", "placed", "misplaced", "dropped", "bins_emptied", "spawned", "is_success"):
         assert key in info
     assert not done and not info["is_success"]
@@ -102,7 +103,7 @@ def test_info_keys_and_success():
     env.sim.data.qpos[qa : qa + 3] = (x, y, 0.4)
     env.sim.forward()
     for _ in range(40):
-        _, reward, done, info = env.step(np.concatenate([env.robots[0].init_qpos, [-1.0]]))
+        _, reward, done, info = env.step(np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]]))
         if done:
             break
     assert done and info["is_success"] and reward == 1.0

@@ -60,7 +60,7 @@ def test_masses_are_plausible(env):
 def test_home_pose_holds_still_under_gravity(env):
     qadr, dadr = arm_joint_ids(env)
     assert np.allclose(env.sim.data.qpos[qadr], HOME_QPOS)
-    hold = np.concatenate([HOME_QPOS, [-1.0]])
+    hold = np.concatenate([HOME_QPOS, [-1.0, -1.0]])
     for _ in range(40):  # 2 s
         env.step(hold)
     assert np.abs(env.sim.data.qpos[qadr] - HOME_QPOS).max() < 1e-3
@@ -71,10 +71,10 @@ def test_home_pose_holds_still_under_gravity(env):
 def test_suction_gripper_mounts_on_robosuite_arms(robot):
     env = make_env(robot)
     obs = env.reset()
-    assert env.action_dim == (8 if robot == "Panda" else 7)  # joints + suction
+    assert env.action_dim == (9 if robot == "Panda" else 8)  # joints + suction + belt pass
     assert type(env.robots[0].gripper["right"]).__name__ == "SuctionGripper"
     q = obs["robot0_joint_pos"]
     for _ in range(20):
-        obs, _, _, info = env.step(np.concatenate([q, [1.0]]))
+        obs, _, _, info = env.step(np.concatenate([q, [1.0, -1.0]]))
     assert np.abs(obs["robot0_joint_pos"] - q).max() < 0.01
     env.close()

@@ -64,11 +64,11 @@ def test_box_does_not_slip_through_fastest_motion(gripped):
 def test_released_box_falls_within_one_control_step(gripped):
     env, box, q_above, _ = gripped
     rel0 = box_in_cup_frame(env, box)
-    env.step(np.concatenate([q_above, [-1.0]]))
+    env.step(np.concatenate([q_above, [-1.0, -1.0]]))
     assert env.seal.held is None
     vz = env.sim.data.qvel[env._box_qvel[box.index] + 2]
     assert vz < -0.3  # 1/20 s of free fall: -0.49 m/s
     assert box_in_cup_frame(env, box)[2] > rel0[2] + 0.005
     for _ in range(20):
-        env.step(np.concatenate([q_above, [-1.0]]))
+        env.step(np.concatenate([q_above, [-1.0, -1.0]]))
     assert env.box_pos(box)[2] == pytest.approx(env.layout.belt_top_z + 0.05, abs=0.005)  # back on the belt

@@ -121,7 +121,8 @@ class ConveyorArena(Arena):
                 "wall_yp": ((sx, t, sz), (0, sy - t, sz)),
             }
             for part, (size, pos) in parts.items():
-                body.append(new_geom(name=f"bin_{color}_{part}", type="box", size=size, pos=pos, rgba=rgba, group=1))
+                body.append(new_geom(name=f"bin_{color}_{part}", type="box", size=size, pos=pos, rgba=rgba, group=1,
+                                     material="matte"))
             self.worldbody.append(body)
 
     def _add_cameras(self) -> None:
@@ -147,6 +148,6 @@ class ConveyorArena(Arena):
             body.append(new_joint(name=f"{name}_joint", type="free", damping="0"))
             body.append(
                 new_geom(name=f"{name}_geom", type="box", size=(half, half, half), group=1, rgba=COLORS["red"],
-                         friction="1.0 0.005 0.0001", condim=4, contype=0, conaffinity=0)
+                         friction="1.0 0.005 0.0001", condim=4, contype=0, conaffinity=0, material="matte")
             )
             self.worldbody.append(body)

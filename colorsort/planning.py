@@ -1,0 +1,178 @@
+"""Motion planning for the cup: mink inverse kinematics for waypoints, ruckig joint trajectories.
+
+``CupIK`` turns a waypoint (cup position, pointing down, turned ``yaw`` about world z) into joint
+angles with mink: a frame task on the cup's grip site, a posture task that keeps the arm near its
+home configuration, and the joint limits. A waypoint it cannot reach within 1 mm and 1 deg is an
+``UnreachableWaypoint`` error naming it.
+
+``plan_motion`` connects two joint configurations with a time-optimal, jerk-limited trajectory
+(ruckig), within the robot's datasheet joint speeds scaled by ``MotionConfig.speed_factor`` and
+the configured acceleration and jerk limits, as the original cell's Reflexxes call did.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mink
+import mujoco
+import numpy as np
+import ruckig
+
+GRIP_SITE = "gripper0_right_grip_site"
+POSITION_TOLERANCE = 1e-3  # [m] a waypoint is reached within this
+ANGLE_TOLERANCE = np.deg2rad(1.0)  # [rad]
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    """Limits of the arm's joint motion.
+
+    Attributes:
+        speed_factor: fraction of the datasheet joint speeds used, in (0, 1].
+        acceleration: max joint acceleration [rad/s^2], every joint.
+        jerk: max joint jerk [rad/s^3], every joint.
+    """
+
+    speed_factor: float = 1.0
+    acceleration: float = 15.0
+    jerk: float = 150.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.speed_factor <= 1.0:
+            raise ValueError(f"speed_factor={self.speed_factor} out of range; valid values lie in (0, 1]")
+        if not 0.0 < self.acceleration <= 100.0:
+            raise ValueError(f"acceleration={self.acceleration} out of range; valid values lie in (0, 100] rad/s^2")
+        if not 0.0 < self.jerk <= 5000.0:
+            raise ValueError(f"jerk={self.jerk} out of range; valid values lie in (0, 5000] rad/s^3")
+
+
+@dataclass(frozen=True)
+class Waypoint:
+    """A cup pose: the pad's centre at ``position`` [m] (world), cup pointing down, turned ``yaw`` [rad] about z."""
+
+    name: str
+    position: tuple[float, float, float]
+    yaw: float = 0.0
+
+
+class UnreachableWaypoint(ValueError):
+    """Raised when IK cannot put the cup on a waypoint within tolerance."""
+
+
+def cup_down_rotation(yaw: float) -> np.ndarray:
+    """Rotation (3, 3) of the grip site with its z axis (the cup's approach) pointing down, its x axis at ``yaw`` [rad]."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
+
+
+def site_yaw(rotation: np.ndarray) -> float:
+    """Yaw [rad] of a grip-site rotation (3, 3): the heading of its x axis about world z."""
+    return float(np.arctan2(rotation[1, 0], rotation[0, 0]))
+
+
+class CupIK:
+    """Inverse kinematics of the cup with mink, on a model of the robot alone.
+
+    Args:
+        model: the robot with its gripper (``robot_model.get_model(mode="mujoco")``), base at the
+            world origin as in the cell; its first ``n`` joints are the arm.
+        posture: comfortable joint configuration [rad], (n,), the posture task's target.
+        posture_cost: weight of the posture task relative to the cup task (small: it only
+            resolves redundancy and keeps the solution near home).
+    """
+
+    def __init__(self, model: mujoco.MjModel, posture: np.ndarray, posture_cost: float = 1e-3):
+        self.model = model
+        self.n = len(posture)
+        self.configuration = mink.Configuration(model)
+        self.frame_task = mink.FrameTask(GRIP_SITE, "site", position_cost=1.0, orientation_cost=1.0, lm_damping=1e-6)
+        self.posture_task = mink.PostureTask(model, cost=posture_cost)
+        q_posture = model.qpos0.copy()
+        q_posture[: self.n] = posture
+        self.posture_task.set_target(q_posture)
+        self.limits = [mink.ConfigurationLimit(model)]
+        self._q = model.qpos0.copy()
+
+    def cup_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grip-site position [m] (3,) and rotation (3, 3) at joint angles ``q`` [rad]."""
+        self._q[: self.n] = q
+        self.configuration.update(self._q)
+        data = self.configuration.data
+        site = data.site(GRIP_SITE)
+        return site.xpos.copy(), site.xmat.reshape(3, 3).copy()
+
+    def solve(self, waypoint: Waypoint, q_init: np.ndarray, max_iters: int = 200, dt: float = 0.1) -> np.ndarray:
+        """Joint angles [rad] (n,) that put the cup on ``waypoint``, starting the search at ``q_init``.
+
+        Raises:
+            UnreachableWaypoint: the best solution misses by more than 1 mm or 1 deg.
+        """
+        self._q[: self.n] = q_init
+        self.configuration.update(self._q)
+        target = mink.SE3.from_rotation_and_translation(
+            mink.SO3.from_matrix(cup_down_rotation(waypoint.yaw)), np.asarray(waypoint.position, float)
+        )
+        self.frame_task.set_target(target)
+        tasks = [self.frame_task, self.posture_task]
+        for _ in range(max_iters):
+            velocity = mink.solve_ik(self.configuration, tasks, dt, solver="daqp", damping=1e-6, limits=self.limits)
+            self.configuration.integrate_inplace(velocity, dt)
+            err = self.frame_task.compute_error(self.configuration)  # (6,): position [m], rotation [rad]
+            if np.linalg.norm(err[:3]) < 1e-5 and np.linalg.norm(err[3:]) < 1e-4:
+                break
+        q = self.configuration.q[: self.n].copy()
+        pos, rot = self.cup_pose(q)
+        pos_err = float(np.linalg.norm(pos - target.translation()))
+        ang_err = float(np.linalg.norm(mink.SO3.from_matrix(rot.T @ cup_down_rotation(waypoint.yaw)).log()))
+        if pos_err > POSITION_TOLERANCE or ang_err > ANGLE_TOLERANCE:
+            raise UnreachableWaypoint(
+                f"Waypoint {waypoint.name!r} at {np.round(waypoint.position, 3).tolist()} m, yaw "
+                f"{np.rad2deg(waypoint.yaw):.1f} deg is out of reach: the closest pose misses by "
+                f"{1000 * pos_err:.1f} mm and {np.rad2deg(ang_err):.2f} deg (tolerance 1 mm, 1 deg)"
+            )
+        return q
+
+
+class JointTrajectory:
+    """A rest-to-rest jerk-limited joint trajectory (ruckig), sampled by time."""
+
+    def __init__(self, trajectory: ruckig.Trajectory, start: np.ndarray, goal: np.ndarray):
+        self._trajectory = trajectory
+        self.start = start
+        self.goal = goal
+
+    @property
+    def duration(self) -> float:
+        """[s]"""
+        return float(self._trajectory.duration)
+
+    def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position [rad], velocity [rad/s] and acceleration [rad/s^2] at time ``t`` [s] (clamped to the ends)."""
+        t = min(max(t, 0.0), self.duration)
+        pos, vel, acc = self._trajectory.at_time(t)
+        return np.array(pos), np.array(vel), np.array(acc)
+
+
+def plan_motion(start: np.ndarray, goal: np.ndarray, max_velocity: np.ndarray, config: MotionConfig) -> JointTrajectory:
+    """Time-optimal jerk-limited motion from rest at ``start`` to rest at ``goal`` [rad], (n,).
+
+    Args:
+        max_velocity: the robot's joint speed limits [rad/s], (n,); scaled by ``config.speed_factor``.
+    """
+    n = len(start)
+    inp = ruckig.InputParameter(n)
+    inp.current_position = list(map(float, start))
+    inp.current_velocity = [0.0] * n
+    inp.current_acceleration = [0.0] * n
+    inp.target_position = list(map(float, goal))
+    inp.target_velocity = [0.0] * n
+    inp.target_acceleration = [0.0] * n
+    inp.max_velocity = list(map(float, np.asarray(max_velocity) * config.speed_factor))
+    inp.max_acceleration = [config.acceleration] * n
+    inp.max_jerk = [config.jerk] * n
+    trajectory = ruckig.Trajectory(n)
+    result = ruckig.Ruckig(n).calculate(inp, trajectory)
+    if result not in (ruckig.Result.Working, ruckig.Result.Finished):
+        raise RuntimeError(f"ruckig could not plan from {np.round(start, 3)} to {np.round(goal, 3)}: {result}")
+    return JointTrajectory(trajectory, np.asarray(start, float), np.asarray(goal, float))
