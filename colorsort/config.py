@@ -28,6 +28,13 @@ ROBOT_HOMES: dict[str, tuple[float, ...]] = {
     "UR5e": (-0.3024, -1.6395, 1.2246, -1.1559, -1.5708, -0.3023),
 }
 
+# Where each robot's base stands on the floor [m]. The UR5e's shoulder is offset 0.14 m to the
+# side of its base axis and its upper arm swings low: 6 cm further back, it clears the bins.
+ROBOT_BASES: dict[str, tuple[float, float, float]] = {
+    "IRB140": (0.0, 0.0, 0.0),
+    "Panda": (0.0, 0.0, 0.0),
+    "UR5e": (-0.06, 0.0, 0.0),
+}
 # Maximum joint speeds [rad/s] from the makers' datasheets: ABB IRB 140 (200, 200, 260, 360, 360,
 # 450 deg/s), Franka Emika Panda, Universal Robots UR5e (180 deg/s on every joint).
 ROBOT_JOINT_SPEEDS: dict[str, tuple[float, ...]] = {

@@ -15,6 +15,8 @@ Belt: carries boxes toward the arm at ``belt_speed`` [m/s]; stops while the ray 
 Spawner: a box from the pool every ``spawn_period`` [s] at the belt's upstream end, colour
     drawn from ``box_colors`` by the env's seeded generator, optional lateral and yaw jitter;
     waits while the pool is empty or the spawn point is occupied.
+Events: ``env.events`` lists every box that left play (``BoxEvent``: time, serial, colour,
+    outcome, bin), for harnesses that score per box.
 Bins: a box resting inside a bin's walls is placed; at ``bin_capacity`` boxes the bin is
     emptied (its boxes go back to the pool) and logged.
 Reward: +1 per box placed in the bin of its colour, -1 per box misplaced or dropped.
@@ -39,7 +41,7 @@ from robosuite.models.tasks import ManipulationTask
 from robosuite.utils.mjcf_utils import new_element
 from robosuite.utils.observables import Observable, sensor
 
-from colorsort.config import BIN_COLORS, COLORS, GRIPPERS, ROBOT_HOMES, ROBOTS, CellLayout, TaskConfig, make_config
+from colorsort.config import BIN_COLORS, COLORS, GRIPPERS, ROBOT_BASES, ROBOT_HOMES, ROBOTS, CellLayout, TaskConfig, make_config
 from colorsort.models.arena import ConveyorArena, park_position
 from colorsort.paths import asset_path
 from colorsort.rendering import check_gl
@@ -66,6 +68,18 @@ class Box:
     status: BoxStatus = BoxStatus.PARKED
     color: str = "red"
     bin: str | None = None
+    serial: int = -1  # 0, 1, 2, ... in order of appearance this episode; -1 while parked
+
+
+@dataclass(frozen=True)
+class BoxEvent:
+    """A box leaving play: ``outcome`` is "placed" (its colour's bin), "misplaced", "dropped" or "rejected"."""
+
+    time: float  # [s] sim time
+    serial: int
+    color: str
+    outcome: str
+    bin: str | None
 
 
 @dataclass
@@ -165,6 +179,8 @@ class ColorSort(ManipulationEnv):
         self._obs_dt = 0.0
         self.boxes = [Box(i) for i in range(self.config.pool_size)]
         self.tally = Tally()
+        self.events: list[BoxEvent] = []
+        self._next_serial = 0
         self.belt_running = True
         self.box_detected = False
         self.belt_pass = False
@@ -205,7 +221,7 @@ class ColorSort(ManipulationEnv):
     def _load_model(self) -> None:
         super()._load_model()
         robot_model = self.robots[0].robot_model
-        robot_model.set_base_xpos([0.0, 0.0, 0.0])
+        robot_model.set_base_xpos(ROBOT_BASES[self.robots[0].name])
         self.robots[0].init_qpos = np.array(ROBOT_HOMES[self.robots[0].name])
         arena = ConveyorArena(self.layout, self.config.pool_size, self.config.box_mass)
         arena.set_origin([0, 0, 0])
@@ -314,6 +330,8 @@ class ColorSort(ManipulationEnv):
             # The rangefinder's drawn ray would show up in the sensor camera's images.
             self.sim._render_context_offscreen.vopt.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
         self.tally = Tally()
+        self.events = []
+        self._next_serial = 0
         for box in self.boxes:
             self._park(box)
         self.sim.data.qpos[self._belt_qpos] = 0.0
@@ -441,6 +459,8 @@ class ColorSort(ManipulationEnv):
                 else:
                     self.tally.misplaced += 1
                     reward -= 1.0
+                outcome = "placed" if box.color == bin_color else "misplaced"
+                self.events.append(BoxEvent(self.cur_time, box.serial, box.color, outcome, bin_color))
                 logger.info("A %s box landed in the %s bin.", box.color, bin_color)
                 self._empty_if_full(bin_color)
                 continue
@@ -453,6 +473,8 @@ class ColorSort(ManipulationEnv):
                     logger.info("A %s box was dropped.", box.color)
                 else:
                     self.tally.rejected += 1
+                outcome = "dropped" if box.color in BIN_COLORS else "rejected"
+                self.events.append(BoxEvent(self.cur_time, box.serial, box.color, outcome, None))
                 self._park(box)
         return reward
 
@@ -484,7 +506,7 @@ class ColorSort(ManipulationEnv):
         d.qvel[va : va + 6] = 0.0
         self._set_collidable(box, False)
         m.body_gravcomp[self._box_body[box.index]] = 1.0
-        box.status, box.bin = BoxStatus.PARKED, None
+        box.status, box.bin, box.serial = BoxStatus.PARKED, None, -1
 
     def _set_collidable(self, box: Box, on: bool) -> None:
         # MuJoCo's broad phase also filters on the per-body OR of its geoms' bits: set both.
@@ -537,6 +559,7 @@ class ColorSort(ManipulationEnv):
         self._set_collidable(box, True)
         m.body_gravcomp[self._box_body[box.index]] = 0.0
         box.color, box.status, box.bin = color, BoxStatus.IN_PLAY, None
+        box.serial, self._next_serial = self._next_serial, self._next_serial + 1
 
     def _spawn_point_clear(self) -> bool:
         L = self.layout

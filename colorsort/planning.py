@@ -92,6 +92,7 @@ class CupIK:
         q_posture[: self.n] = posture
         self.posture_task.set_target(q_posture)
         self.limits = [mink.ConfigurationLimit(model)]
+        self.posture = np.asarray(posture, float)
         self._q = model.qpos0.copy()
 
     def cup_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -105,9 +106,17 @@ class CupIK:
     def solve(self, waypoint: Waypoint, q_init: np.ndarray, max_iters: int = 200, dt: float = 0.1) -> np.ndarray:
         """Joint angles [rad] (n,) that put the cup on ``waypoint``, starting the search at ``q_init``.
 
+        A search that ends in a local minimum is restarted from the posture (home) configuration.
+
         Raises:
             UnreachableWaypoint: the best solution misses by more than 1 mm or 1 deg.
         """
+        try:
+            return self._solve_from(waypoint, q_init, max_iters, dt)
+        except UnreachableWaypoint:
+            return self._solve_from(waypoint, self.posture, max_iters, dt)
+
+    def _solve_from(self, waypoint: Waypoint, q_init: np.ndarray, max_iters: int, dt: float) -> np.ndarray:
         self._q[: self.n] = q_init
         self.configuration.update(self._q)
         target = mink.SE3.from_rotation_and_translation(
