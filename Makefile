@@ -17,13 +17,16 @@ $(STAMP): setup.py overrides.txt
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/python demos/run_cell.py --seconds 60 --out outputs
+	$(VENV)/bin/colorsort-sort --boxes 6 --seed 0 --video outputs/sort.mp4 --json outputs/sort.json
 
 test: $(STAMP)
 	$(VENV)/bin/python -m pytest -q tests
 
 bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_env.py
+	$(VENV)/bin/python demos/bench_perception.py --views 1000
+	$(VENV)/bin/python demos/bench_sort.py --preset default --seeds 10 --boxes 20
+	$(VENV)/bin/python demos/bench_sort.py --preset seed --seeds 3 --boxes 4
 
 clean:
 	rm -rf $(VENV) build *.egg-info outputs

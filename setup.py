@@ -47,5 +47,5 @@ setup(
     package_data={"colorsort.assets": ["*.md", "**/*.xml", "**/*.md", "**/*.json", "**/*.stl", "**/*.png"]},
     install_requires=INSTALL_REQUIRES,
     extras_require=EXTRAS_REQUIRE,
-    entry_points={"console_scripts": ["colorsort-demo=colorsort.demo:main"]},
+    entry_points={"console_scripts": ["colorsort-sort=colorsort.sort:main"]},
 )

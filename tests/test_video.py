@@ -1,8 +1,8 @@
-"""Headless video: the demo films the cell; frames decode back to what was rendered."""
+"""Headless video: colorsort-sort films the cell; frames decode back to what was rendered."""
 
 import numpy as np
 
-from colorsort.demo import main as demo_main
+from colorsort.sort import SortConfig, run_sort
 from colorsort.video import VideoWriter, read_video
 
 
@@ -17,9 +17,10 @@ def test_video_round_trip(tmp_path):
     assert np.abs(decoded.astype(int) - np.stack(frames)).mean() < 4
 
 
-def test_demo_writes_video_and_still(tmp_path):
-    assert demo_main(["--seconds", "2", "--out", str(tmp_path), "--width", "160", "--height", "120"]) == 0
-    frames = read_video(tmp_path / "cell.mp4")
-    assert frames.shape == (40, 120, 160, 3)
-    assert (tmp_path / "cell.png").stat().st_size > 1000
+def test_sort_films_every_step_with_an_overlay(tmp_path):
+    path = tmp_path / "sort.mp4"
+    report = run_sort(SortConfig(boxes=1, video=str(path), video_size=(120, 160)), progress=False, log=lambda _: None)
+    frames = read_video(path)
+    assert frames.shape == (int(round(report.sim_time_s / 0.05)), 120, 160, 3)  # one frame per 20 Hz step
     assert frames[0].std() > 10  # a picture, not a blank frame
+    assert frames[:, :12, :80].max() > 230  # the overlay's white text in the top-left corner

@@ -1,0 +1,120 @@
+"""The scripted expert sorts by what its camera sees, waits for the sensor, lets unknown boxes through."""
+
+import json
+
+import numpy as np
+import pytest
+from conftest import make_env
+
+from colorsort.expert import Phase, SortingExpert
+from colorsort.sort import main as sort_main
+
+
+def make_expert_env(robot="IRB140", **kwargs):
+    env = make_env(robot, has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor"], **kwargs)
+    obs = env.reset()
+    expert = SortingExpert(env)
+    expert.reset(obs)
+    return env, expert, obs
+
+
+def run_until(env, expert, obs, boxes: int, max_time: float, on_step=None):
+    while len(env.events) < boxes and env.cur_time < max_time:
+        action = expert.act(obs)
+        obs, _, _, info = env.step(action)
+        if on_step is not None:
+            on_step(action, obs, info)
+    return obs
+
+
+def assert_all_in_their_bins(env, boxes):
+    assert len(env.events) >= boxes
+    for event in env.events[:boxes]:
+        assert event.outcome == "placed" and event.bin == event.color
+    assert env.tally.misplaced == 0 and env.tally.dropped == 0
+
+
+def test_sorts_three_boxes_into_the_right_bins():
+    env, expert, obs = make_expert_env()
+    run_until(env, expert, obs, boxes=3, max_time=25.0)
+    assert_all_in_their_bins(env, 3)
+    assert [c.seen_color for c in expert.cycles[:3]] == [e.color for e in env.events[:3]]
+    env.close()
+
+
+def test_picks_off_centre_turned_boxes():
+    env, expert, obs = make_expert_env(lateral_jitter=0.05, yaw_jitter=45.0, seed=4)
+    run_until(env, expert, obs, boxes=3, max_time=25.0)
+    assert_all_in_their_bins(env, 3)
+    env.close()
+
+
+@pytest.mark.parametrize("robot", ["Panda", "UR5e"])
+def test_sorts_with_robosuite_arms(robot):
+    env, expert, obs = make_expert_env(robot)
+    run_until(env, expert, obs, boxes=2, max_time=20.0)
+    assert_all_in_their_bins(env, 2)
+    env.close()
+
+
+def test_does_not_pick_while_the_belt_runs_with_no_box_at_the_sensor():
+    env, expert, obs = make_expert_env(spawn_period=100.0)
+    seen = []
+
+    def check(action, obs, info):
+        if not any(seen) and not info["box_detected"]:  # the box still rides toward the sensor: the arm waits
+            assert info["belt_running"]
+            assert expert.phase in (Phase.MOVE_TO_WAIT, Phase.WAIT_FOR_BOX)
+            assert action[-2] < 0
+        seen.append(info["box_detected"])
+
+    run_until(env, expert, obs, boxes=1, max_time=12.0, on_step=check)
+    assert any(seen) and not all(seen)
+    assert_all_in_their_bins(env, 1)
+    env.close()
+
+
+def test_lets_boxes_without_a_bin_ride_past_as_rejected():
+    env, expert, obs = make_expert_env(box_colors=("yellow", "purple"), spawn_period=3.0)
+    suction = []
+    run_until(env, expert, obs, boxes=2, max_time=20.0, on_step=lambda a, o, i: suction.append(a[-2] > 0))
+    assert env.tally.rejected == 2 and env.tally.dropped == 0 and not any(suction)
+    assert [c.seen_color for c in expert.cycles[:2]] == ["unknown", "unknown"]
+    env.close()
+
+
+def test_seed_preset_sorts_at_the_original_rhythm():
+    env, expert, obs = make_expert_env(preset="seed")
+    run_until(env, expert, obs, boxes=1, max_time=30.0)
+    assert_all_in_their_bins(env, 1)
+    # 0.82 m of belt at 0.05 m/s: the first box reaches the sensor after about 16 s.
+    assert 15.0 < expert.cycles[0].detected_at < 18.0
+    env.close()
+
+
+def test_expert_needs_the_sensor_camera():
+    env = make_env()
+    env.reset()
+    with pytest.raises(ValueError, match="sensor camera"):
+        SortingExpert(env)
+    env.close()
+
+
+def test_sort_cli_writes_the_summary(tmp_path, capsys):
+    path = tmp_path / "sort.json"
+    assert sort_main(["--boxes", "2", "--seed", "1", "--json", str(path)]) == 0
+    summary = json.loads(path.read_text())
+    assert {"correct", "misplaced", "dropped", "rejected", "boxes_per_minute", "boxes"} <= set(summary)
+    assert summary["correct"] == 2 and len(summary["boxes"]) == 2 and summary["boxes_per_minute"] > 0
+    for box in summary["boxes"]:
+        assert set(box) == {"true_color", "seen_color", "bin", "cycle_time_s"}
+        assert box["true_color"] == box["seen_color"] == box["bin"]
+    assert "correct 2" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [["--boxes", "0"], ["--robot", "Sawyer"], ["--preset", "turbo"]])
+def test_sort_cli_bad_arguments_exit_2(argv, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        sort_main(argv)
+    assert exit_info.value.code == 2
+    assert "error" in capsys.readouterr().err

@@ -1,0 +1,89 @@
+"""The colour sensor on rendered views: colours under changing light, unknown colours, localisation."""
+
+import numpy as np
+import pytest
+from conftest import make_env
+
+from colorsort.lighting import CONDITIONS, Lighting, LightRig
+from colorsort.perception import UNKNOWN, ColorSensor, PerceptionConfig
+from colorsort.sensor_views import ViewSampler, wrap_quarter_turn
+
+
+@pytest.fixture(scope="module")
+def sampler():
+    env = make_env(has_offscreen_renderer=True, camera_names=["sensor"])
+    env.reset()
+    yield ViewSampler(env, 128, 128)
+    env.close()
+
+
+@pytest.fixture(scope="module")
+def sensor(sampler):
+    return ColorSensor(sampler.camera, sampler.env.layout)
+
+
+@pytest.mark.parametrize("condition", ["normal", "dim", "bright", "warm", "cold", "noise", "shadow"])
+def test_labels_and_locates_each_colour(sampler, sensor, condition):
+    rng = np.random.default_rng(7)
+    for color in ("red", "green", "blue"):
+        for _ in range(4):
+            view = sampler.sample(color, CONDITIONS[condition], "single", rng)
+            det = sensor.box_at_sensor(view.image)
+            assert det is not None and det.color == color and det.complete
+            assert np.linalg.norm(det.center[:2] - view.center[:2]) < 0.005
+            assert abs(np.rad2deg(wrap_quarter_turn(det.yaw - view.yaw))) < 3.0
+            assert 0.5 < det.confidence <= 1.0
+
+
+@pytest.mark.parametrize("color", ["yellow", "purple"])
+@pytest.mark.parametrize("condition", ["normal", "dim", "bright", "warm", "cold"])
+def test_colour_without_a_bin_is_unknown(sampler, sensor, color, condition):
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        det = sensor.box_at_sensor(sampler.sample(color, CONDITIONS[condition], "single", rng).image)
+        assert det is not None and det.color == UNKNOWN
+
+
+def test_picks_the_box_at_the_sensor_when_two_are_in_view(sampler, sensor):
+    rng = np.random.default_rng(11)
+    for color in ("red", "green", "blue"):
+        view = sampler.sample(color, CONDITIONS["normal"], "two_boxes", rng, other_colors=("blue", "red"))
+        det = sensor.box_at_sensor(view.image)
+        assert det.color == color
+        assert np.linalg.norm(det.center[:2] - view.center[:2]) < 0.005
+        assert len(sensor.detect(view.image)) == 2
+
+
+def test_box_partly_in_view_is_named_and_flagged(sampler, sensor):
+    rng = np.random.default_rng(5)
+    for color in ("red", "green", "blue"):
+        view = sampler.sample(color, CONDITIONS["normal"], "partial", rng)
+        (det,) = sensor.detect(view.image)
+        assert det.color == color and not det.complete
+
+
+def test_empty_belt_has_no_detection(sampler, sensor):
+    for box in sampler.env.boxes_in_play():
+        sampler.env._park(box)
+    sampler.env.sim.forward()
+    image = np.ascontiguousarray(sampler.env.sim.render(camera_name="sensor", width=128, height=128)[::-1])
+    assert sensor.detect(image) == [] and sensor.box_at_sensor(image) is None
+
+
+def test_light_rig_changes_lights_and_restores_them(sampler):
+    model = sampler.env.sim.model._model
+    before = model.light_diffuse.copy()
+    rig = LightRig(model)
+    rig.apply(Lighting(brightness=0.5, tint=(1.0, 0.8, 0.6)))
+    assert np.allclose(model.light_diffuse, before * 0.5 * np.array([1.0, 0.8, 0.6]))
+    rig.restore()
+    assert np.allclose(model.light_diffuse, before)
+
+
+def test_bad_input_raises(sensor):
+    with pytest.raises(ValueError, match="uint8 image"):
+        sensor.detect(np.zeros((64, 64, 3), np.uint8))
+    with pytest.raises(ValueError, match="Valid colours"):
+        PerceptionConfig(colors=("red", "pink"))
+    with pytest.raises(ValueError, match="brightness"):
+        Lighting(brightness=0.0)
