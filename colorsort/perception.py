@@ -9,8 +9,9 @@ are used; never the simulator's geom colours or poses. The pipeline:
 3. label each pixel by the nearest reference hue of the configured colours (within a tolerance;
    anything else is "other"), so that touching boxes of different colours come apart;
 4. connected components per label; a component about twice a box's area is split with k-means;
-5. per component: the minimum-area rectangle gives centre and yaw in the image, back-projected
-   through the camera onto the plane of the boxes' top faces.
+5. per component: the minimum-area rectangle's centre and the outline's mean direction (on the
+   quarter-turn circle) give centre and yaw, back-projected through the camera onto the plane
+   of the boxes' top faces.
 
 Seen from straight above, a box within half its size of the optical axis shows only its top
 face (its sides are hidden behind it), so the rectangle is the top face itself.
@@ -255,9 +256,14 @@ class ColorSensor:
         rect = cv2.minAreaRect(contour)
         # The contour runs through the centres of the boundary pixels, which lie at +0.5.
         shift = np.array(offset, float) + 0.5
-        world = cam.pixel_to_plane(cv2.boxPoints(rect) + shift, self.top_z)  # (4, 3)
-        edge = world[1] - world[0]
-        yaw = float((np.arctan2(edge[1], edge[0]) + np.pi / 4) % (np.pi / 2) - np.pi / 4)
+        # Yaw from every boundary point, not just the rectangle's extremes: the direction of the
+        # outline around each point, averaged on the quarter-turn circle (angles times 4).
+        outline = cam.pixel_to_plane(contour[:, 0, :] + shift, self.top_z)[:, :2]  # (n, 2)
+        tangent = np.roll(outline, -3, axis=0) - np.roll(outline, 3, axis=0)
+        angle = np.arctan2(tangent[:, 1], tangent[:, 0])
+        weight = np.linalg.norm(tangent, axis=1)
+        yaw = float(np.arctan2((weight * np.sin(4 * angle)).sum(), (weight * np.cos(4 * angle)).sum()) / 4)
+        yaw = (yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4
         center = cam.pixel_to_plane(np.array(rect[0]) + shift, self.top_z)[0]
         rows, cols = np.nonzero(part)
         rows, cols = rows + offset[1], cols + offset[0]

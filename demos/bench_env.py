@@ -39,7 +39,7 @@ def main() -> None:
 
     env = suite.make("ColorSort", robots=args.robot, seed=0, ignore_done=True, has_offscreen_renderer=True)
     env.reset()
-    hold = np.concatenate([env.robots[0].init_qpos, [-1.0]])
+    hold = np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]])  # suction off, no belt pass
     for _ in range(100):  # warm up; boxes on the belt
         env.step(hold)
     substeps = int(round(env.control_timestep / env.model_timestep))
