@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.config import BIN_COLORS, PRESETS, ROBOTS, make_config
+from colorsort.config import BIN_COLORS, PRESETS, ROBOT_JOINT_SPEEDS, ROBOTS, make_config
 from colorsort.env import ColorSort
 from colorsort.expert import SortingExpert
 from colorsort.video import VideoWriter
@@ -76,6 +76,7 @@ class SortReport:
     rejected: int = 0
     boxes_per_minute: float = 0.0
     sim_time_s: float = 0.0
+    peak_speed_ratio: float = 0.0  # max over steps and joints of |joint velocity| / datasheet speed
     boxes: list[BoxReport] = field(default_factory=list)
 
     def to_json(self) -> dict:
@@ -104,6 +105,7 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
     expert.reset(obs)
     writer = VideoWriter(config.video, fps=env.control_freq) if config.video else None
     report = SortReport()
+    vmax = np.array(ROBOT_JOINT_SPEEDS[config.robot])
     handled: dict[int, int] = {}  # box serial -> index of the expert's cycle
     reported = 0
     bar = tqdm(total=config.boxes, unit="box", disable=not progress, desc="sorting")
@@ -116,6 +118,8 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
                 if box is not None:
                     handled[box] = len(expert.cycles) - 1
             obs, _, _, _ = env.step(action)
+            speed = float(np.max(np.abs(obs["robot0_joint_vel"]) / vmax))
+            report.peak_speed_ratio = max(report.peak_speed_ratio, speed)
             if writer is not None:
                 writer.write(_overlay(obs["scene_image"], expert, env))
             for event in env.events[reported:]:
