@@ -71,8 +71,9 @@ class ViewSampler:
         yaw = rng.uniform(-np.pi / 4, np.pi / 4)
         y = L.belt_y + rng.uniform(-self.lateral_jitter, self.lateral_jitter)
         reach = half * (abs(np.cos(yaw)) + abs(np.sin(yaw)))  # centre to leading corner along x
+        top_z = L.belt_top_z + L.box_size
+        x_edge = self.camera.pixel_to_plane(np.array([[self.width, self.height / 2]]), top_z)[0, 0]  # upstream edge of view
         if layout == "partial":
-            x_edge = self.camera.pixel_to_plane(np.array([[self.width, self.height / 2]]), L.belt_top_z + L.box_size)[0, 0]
             x = x_edge + rng.uniform(-0.3, 0.3) * L.box_size  # 20% to 80% of the box in view
         else:
             x = L.sensor_x + reach + rng.uniform(0.0, 0.005)
@@ -87,7 +88,6 @@ class ViewSampler:
         image = np.ascontiguousarray(env.sim.render(camera_name="sensor", width=self.width, height=self.height)[::-1])
         self.rig.restore()
         image = sensor_effects(image, lighting, rng)
-        x_edge = self.camera.pixel_to_plane(np.array([[self.width - 0.5, self.height / 2]]), L.belt_top_z + L.box_size)[0, 0]
         complete = layout != "partial" or x + reach < x_edge
-        center = np.array([x, y, L.belt_top_z + L.box_size])
+        center = np.array([x, y, top_z])
         return View(image, color, center, wrap_quarter_turn(yaw), complete)
