@@ -229,7 +229,7 @@ class SortingExpert:
                 self._enter(P.WAIT_FOR_BOX)
         elif self.phase is P.DESCEND:
             if self._arrived(q):
-                if np.allclose(goal, self._q_pick["above"]):
+                if not self.suction:  # over the box: suction on for the last few centimetres
                     self.suction = True
                     self._start_motion(goal, self._q_pick["contact"], tolerance=0.01)
                 else:
