@@ -52,6 +52,10 @@ logger = logging.getLogger("colorsort")
 CAMERAS: tuple[str, ...] = ("scene", "sensor", "wrist")
 WRIST_CAMERA_MJCF = "gripper0_right_wrist"  # robosuite prefixes the gripper's camera name
 SETTLED_SPEED = 0.05  # [m/s] a box slower than this inside a bin counts as resting there
+# The parts of MuJoCo's state that ColorSort changes while it runs (see ``get_sim_state``).
+MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
+                 | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
+                 | mujoco.mjtState.mjSTATE_WARMSTART)
 
 
 class BoxStatus(Enum):
@@ -370,18 +374,22 @@ class ColorSort(ManipulationEnv):
         self.seal.update()
 
     def _update_observables(self, force: bool = False) -> None:
-        """Sample every observable once per policy step, at its end, not after every physics step.
+        """Sample every observable once per policy step, at its very end (see ``_post_action``).
 
         robosuite calls this after each physics step and samples at the start of each policy
-        period; ColorSort samples once, after the last physics step, so observations show the
-        state the step produced (observable delays and corrupters are not used by the task).
+        period, from kinematics one physics step old. ColorSort samples once, after the step's
+        boxes were spawned or parked and the kinematics recomputed, so that an observation shows
+        exactly the state ``get_sim_state`` returns (and a replay of that state re-renders it).
+        Observable delays and corrupters are not used by the task.
         """
         self._obs_dt += self.model_timestep
-        substeps = int(round(self.control_timestep / self.model_timestep))
-        if force or self._substep >= substeps:
-            for observable in self._observables.values():
-                observable.update(timestep=self._obs_dt, obs_cache=self._obs_cache, force=True)
-            self._obs_dt = 0.0
+        if force:
+            self._sample_observables()
+
+    def _sample_observables(self) -> None:
+        for observable in self._observables.values():
+            observable.update(timestep=self._obs_dt, obs_cache=self._obs_cache, force=True)
+        self._obs_dt = 0.0
 
     def _drive_belt(self) -> None:
         """Run or stop the belt from the ray sensor (and the belt-pass command), once per physics step.
@@ -399,6 +407,8 @@ class ColorSort(ManipulationEnv):
     def _post_action(self, action):
         self._step_reward = self._update_boxes()
         self._spawn_if_due()
+        mujoco.mj_forward(self.sim.model._model, self._data)  # mj_step leaves kinematics a substep old
+        self._sample_observables()
         reward, done, info = super()._post_action(action)
         info.update(self.task_info())
         failed = self.tally.misplaced > 0 or self.tally.dropped > 0
@@ -435,10 +445,76 @@ class ColorSort(ManipulationEnv):
             "is_success": self._check_success(),
         }
 
+    # ------------------------------------------------------------------ state
+    @property
+    def sim_state_size(self) -> int:
+        """Length of ``get_sim_state()``'s vector."""
+        return mujoco.mj_stateSize(self.sim.model._model, MJ_STATE_SPEC) + 4 * len(self.boxes) + 1 + mujoco.mjNEQDATA + 5
+
+    def get_sim_state(self) -> np.ndarray:
+        """Everything that makes this instant replayable, as one float64 vector.
+
+        MuJoCo's state (``MJ_STATE_SPEC``: time, qpos, qvel, controls, active equalities, mocap
+        and the solver's warm start, so that stepping on from it is bit-exact), then per pooled
+        box its colour (index in ``config.COLORS``), status, bin (index in ``BIN_COLORS`` or -1)
+        and serial, then the seal (held box or -1, its weld's ``eq_data``), then the belt-pass
+        command, the belt and ray flags, the next spawn time [s], the next serial, and the env's
+        clock [s]. Applied forces (``qfrc_applied``, ``xfrc_applied``) are left out: ColorSort
+        never sets them.
+        """
+        m, d = self.sim.model._model, self._data
+        mj = np.empty(mujoco.mj_stateSize(m, MJ_STATE_SPEC))
+        mujoco.mj_getState(m, d, mj, MJ_STATE_SPEC)
+        colors, statuses = list(COLORS), list(BoxStatus)
+        boxes = [(colors.index(b.color), statuses.index(b.status),
+                  BIN_COLORS.index(b.bin) if b.bin is not None else -1, b.serial) for b in self.boxes]
+        held = self.seal.held if self.seal.held is not None else -1
+        weld = m.eq_data[self.seal.welds[held]] if held >= 0 else np.zeros(mujoco.mjNEQDATA)
+        tail = (float(self.belt_pass), float(self.belt_running), float(self._next_spawn_time),
+                float(self._next_serial), float(self.cur_time))
+        return np.concatenate([mj, np.ravel(boxes), [held], weld, tail]).astype(np.float64)
+
+    def set_sim_state(self, state: np.ndarray) -> None:
+        """Restore an instant saved by ``get_sim_state`` (same robot, layout and pool size).
+
+        The episode's counters and events are not part of the state: they keep counting from
+        their current values.
+        """
+        state = np.asarray(state, dtype=np.float64)
+        if state.shape != (self.sim_state_size,):
+            raise ValueError(f"Expected a state of shape ({self.sim_state_size},), got {state.shape}: "
+                             "was it saved with another robot or pool size?")
+        m, d = self.sim.model._model, self._data
+        n_mj = mujoco.mj_stateSize(m, MJ_STATE_SPEC)
+        mujoco.mj_setState(m, d, state[:n_mj], MJ_STATE_SPEC)
+        boxes = state[n_mj : n_mj + 4 * len(self.boxes)].reshape(-1, 4).astype(int)
+        colors, statuses = list(COLORS), list(BoxStatus)
+        for box, (color, status, bin_index, serial) in zip(self.boxes, boxes):
+            box.color, box.status, box.serial = colors[color], statuses[status], int(serial)
+            box.bin = BIN_COLORS[bin_index] if bin_index >= 0 else None
+            m.geom_rgba[self._box_geom[box.index]] = COLORS[box.color]
+            self._set_collidable(box, box.status is not BoxStatus.PARKED)
+            m.body_gravcomp[self._box_body[box.index]] = float(box.status is BoxStatus.PARKED)
+        rest = state[n_mj + 4 * len(self.boxes) :]
+        held, weld, tail = int(rest[0]), rest[1 : 1 + mujoco.mjNEQDATA], rest[1 + mujoco.mjNEQDATA :]
+        self.seal.held = held if held >= 0 else None
+        if held >= 0:
+            m.eq_data[self.seal.welds[held]] = weld
+        self.belt_pass, self.belt_running = bool(tail[0]), bool(tail[1])
+        self._next_spawn_time, self._next_serial, self.cur_time = float(tail[2]), int(tail[3]), float(tail[4])
+        self.timestep = int(round(self.cur_time / self.control_timestep))
+        mujoco.mj_forward(m, d)
+        self.box_detected = bool(0.0 <= d.sensordata[self._ray_adr] <= self.layout.sensor_range)
+
     # ------------------------------------------------------------------ boxes
     def box_pos(self, box: Box) -> np.ndarray:
         """World position of a box's centre [m]."""
         return self.sim.data.body_xpos[self._box_body[box.index]].copy()
+
+    def box_pose(self, box: Box) -> np.ndarray:
+        """A box's free-joint pose: centre [m] then quaternion (w, x, y, z), shape (7,)."""
+        qa = self._box_qpos[box.index]
+        return self.sim.data.qpos[qa : qa + 7].copy()
 
     def _update_boxes(self) -> float:
         """Classify boxes in play as placed, dropped or rejected; empty full bins. Returns the reward."""
