@@ -47,5 +47,9 @@ setup(
     package_data={"colorsort.assets": ["*.md", "**/*.xml", "**/*.md", "**/*.json", "**/*.stl", "**/*.png"]},
     install_requires=INSTALL_REQUIRES,
     extras_require=EXTRAS_REQUIRE,
-    entry_points={"console_scripts": ["colorsort-sort=colorsort.sort:main"]},
+    entry_points={"console_scripts": [
+        "colorsort-sort=colorsort.sort:main",
+        "colorsort-collect=colorsort.collect:main",
+        "colorsort-replay=colorsort.replay:main",
+    ]},
 )

@@ -28,6 +28,7 @@ Randomisation: only through ``seed`` (the env's own ``numpy.random.Generator``).
 from __future__ import annotations
 
 import logging
+import time
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
@@ -56,6 +57,28 @@ SETTLED_SPEED = 0.05  # [m/s] a box slower than this inside a bin counts as rest
 MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
                  | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
                  | mujoco.mjtState.mjSTATE_WARMSTART)
+
+
+RNG_STATE_SIZE = 10  # a PCG64 generator's state and increment (4 x 32 bits each), then its uint32 buffer
+
+
+def rng_to_words(rng: np.random.Generator) -> np.ndarray:
+    """A PCG64 generator's full state as 32-bit words (exact in float64)."""
+    st = rng.bit_generator.state
+    if st["bit_generator"] != "PCG64":
+        raise ValueError(f"Only PCG64 generators can be saved, not {st['bit_generator']}")
+    words = [(v >> (32 * k)) & 0xFFFFFFFF for v in (st["state"]["state"], st["state"]["inc"]) for k in range(4)]
+    return np.array(words + [st["has_uint32"], st["uinteger"]], dtype=np.float64)
+
+
+def rng_from_words(words: np.ndarray) -> np.random.Generator:
+    """The generator ``rng_to_words`` saved."""
+    w = [int(x) for x in words]
+    state, inc = (sum(w[i + k] << (32 * k) for k in range(4)) for i in (0, 4))
+    gen = np.random.Generator(np.random.PCG64())
+    gen.bit_generator.state = {"bit_generator": "PCG64", "state": {"state": state, "inc": inc},
+                               "has_uint32": w[8], "uinteger": w[9]}
+    return gen
 
 
 class BoxStatus(Enum):
@@ -191,6 +214,7 @@ class ColorSort(ManipulationEnv):
         self._arm_action = np.zeros(0)
         self._next_spawn_time = 0.0
         self._step_reward = 0.0
+        self.render_seconds = 0.0  # [s] wall time spent rendering camera observations, for benchmarks
 
         super().__init__(
             robots=robot_list,
@@ -283,12 +307,11 @@ class ColorSort(ManipulationEnv):
 
         @sensor(modality=modality)
         def camera_rgb(obs_cache):
-            img = self.sim.render(camera_name=cam_name, width=cam_w, height=cam_h, depth=cam_d)
             if cam_d:
-                rgb, depth = img
-                obs_cache[f"{alias}_depth"] = np.ascontiguousarray(depth[::-1, :, None])
-                return np.ascontiguousarray(rgb[::-1])
-            return np.ascontiguousarray(img[::-1])
+                rgb, depth = self.camera_image(alias, cam_w, cam_h, depth=True)
+                obs_cache[f"{alias}_depth"] = depth
+                return rgb
+            return self.camera_image(alias, cam_w, cam_h)
 
         sensors, names = [camera_rgb], [f"{alias}_image"]
         if cam_d:
@@ -300,6 +323,29 @@ class ColorSort(ManipulationEnv):
             sensors.append(camera_depth)
             names.append(f"{alias}_depth")
         return sensors, names
+
+    def _hide_rangefinder(self) -> None:
+        # The rangefinder's drawn ray would show up in the cameras' images.
+        self.sim._render_context_offscreen.vopt.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
+
+    def camera_image(self, camera: str, width: int, height: int, depth: bool = False):
+        """Render camera ``camera`` ("scene", "sensor", "wrist") now: (H, W, 3) uint8 RGB, right side up.
+
+        With ``depth``, also the depth image (H, W, 1) [m]. Time spent adds to ``render_seconds``.
+        """
+        if camera not in CAMERAS:
+            raise ValueError(f"Unknown camera {camera!r}. Valid cameras: {list(CAMERAS)}")
+        start = time.perf_counter()
+        name = WRIST_CAMERA_MJCF if camera == "wrist" else camera
+        if self.sim._render_context_offscreen is None:  # created by the first render
+            self.sim.render(camera_name=name, width=width, height=height)
+            self._hide_rangefinder()
+        img = self.sim.render(camera_name=name, width=width, height=height, depth=depth)
+        self.render_seconds += time.perf_counter() - start
+        if depth:
+            rgb, d = img
+            return np.ascontiguousarray(rgb[::-1]), np.ascontiguousarray(d[::-1, :, None])
+        return np.ascontiguousarray(img[::-1])
 
     def _setup_observables(self) -> dict[str, Observable]:
         observables = super()._setup_observables()
@@ -331,8 +377,7 @@ class ColorSort(ManipulationEnv):
     def _reset_internal(self) -> None:
         super()._reset_internal()
         if self.has_offscreen_renderer and self.sim._render_context_offscreen is not None:
-            # The rangefinder's drawn ray would show up in the sensor camera's images.
-            self.sim._render_context_offscreen.vopt.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
+            self._hide_rangefinder()
         self.tally = Tally()
         self.events = []
         self._next_serial = 0
@@ -449,7 +494,7 @@ class ColorSort(ManipulationEnv):
     @property
     def sim_state_size(self) -> int:
         """Length of ``get_sim_state()``'s vector."""
-        return mujoco.mj_stateSize(self.sim.model._model, MJ_STATE_SPEC) + 4 * len(self.boxes) + 1 + mujoco.mjNEQDATA + 5
+        return mujoco.mj_stateSize(self.sim.model._model, MJ_STATE_SPEC) + 4 * len(self.boxes) + 1 + mujoco.mjNEQDATA + 5 + RNG_STATE_SIZE
 
     def get_sim_state(self) -> np.ndarray:
         """Everything that makes this instant replayable, as one float64 vector.
@@ -458,8 +503,8 @@ class ColorSort(ManipulationEnv):
         and the solver's warm start, so that stepping on from it is bit-exact), then per pooled
         box its colour (index in ``config.COLORS``), status, bin (index in ``BIN_COLORS`` or -1)
         and serial, then the seal (held box or -1, its weld's ``eq_data``), then the belt-pass
-        command, the belt and ray flags, the next spawn time [s], the next serial, and the env's
-        clock [s]. Applied forces (``qfrc_applied``, ``xfrc_applied``) are left out: ColorSort
+        command, the belt and ray flags, the next spawn time [s], the next serial, the env's
+        clock [s], and the env's random generator (PCG64, in 32-bit words). Applied forces (``qfrc_applied``, ``xfrc_applied``) are left out: ColorSort
         never sets them.
         """
         m, d = self.sim.model._model, self._data
@@ -472,7 +517,7 @@ class ColorSort(ManipulationEnv):
         weld = m.eq_data[self.seal.welds[held]] if held >= 0 else np.zeros(mujoco.mjNEQDATA)
         tail = (float(self.belt_pass), float(self.belt_running), float(self._next_spawn_time),
                 float(self._next_serial), float(self.cur_time))
-        return np.concatenate([mj, np.ravel(boxes), [held], weld, tail]).astype(np.float64)
+        return np.concatenate([mj, np.ravel(boxes), [held], weld, tail, rng_to_words(self.rng)]).astype(np.float64)
 
     def set_sim_state(self, state: np.ndarray) -> None:
         """Restore an instant saved by ``get_sim_state`` (same robot, layout and pool size).
@@ -502,9 +547,12 @@ class ColorSort(ManipulationEnv):
             m.eq_data[self.seal.welds[held]] = weld
         self.belt_pass, self.belt_running = bool(tail[0]), bool(tail[1])
         self._next_spawn_time, self._next_serial, self.cur_time = float(tail[2]), int(tail[3]), float(tail[4])
+        self.rng = rng_from_words(tail[5:])
         self.timestep = int(round(self.cur_time / self.control_timestep))
         mujoco.mj_forward(m, d)
         self.box_detected = bool(0.0 <= d.sensordata[self._ray_adr] <= self.layout.sensor_range)
+        for controller in self.robots[0].part_controllers.values():
+            controller.update(force=True)  # robosuite caches joint states and the mass matrix between steps
 
     # ------------------------------------------------------------------ boxes
     def box_pos(self, box: Box) -> np.ndarray:

@@ -1,7 +1,8 @@
 """The scripted sorting expert: the original cell's phases as a state machine.
 
 It acts only on what a real cell has: the ray sensor (``box_detected``), the colour camera
-(``sensor_image``), the arm's joint angles (``robot0_joint_pos``) and the cup's vacuum switch
+(``sensor_image``, or a photo it triggers when the ray fires if the env does not render that
+camera every step), the arm's joint angles (``robot0_joint_pos``) and the cup's vacuum switch
 (``suction_sealed``). Waypoints come from mink IK, motions from ruckig (``planning.py``).
 
 Phases (the original's numbering):
@@ -76,29 +77,32 @@ class ExpertConfig:
         perception: the colour sensor's thresholds.
         grip_timeout: [s] time to wait for a seal before backing off and looking again.
         release_time: [s] time after the seal is gone before moving on (the box falls clear).
+        sensor_image_size: [px] side of the triggered photo, when the env's observations do not
+            include ``sensor_image``.
     """
 
     motion: MotionConfig = field(default_factory=MotionConfig)
     perception: PerceptionConfig = field(default_factory=PerceptionConfig)
     grip_timeout: float = 1.0
     release_time: float = 0.15
+    sensor_image_size: int = 128
 
 
 class SortingExpert:
     """Sorts boxes from the belt into the bins of the colours its camera sees.
 
     Args:
-        env: a ColorSort env with ``use_camera_obs=True`` and the "sensor" camera; the expert
-            reads its calibration (camera pose, robot kinematics, controller gains), not its state.
+        env: a ColorSort env with an off-screen renderer: the expert uses the ``sensor`` camera's
+            observation if the env has one, else it takes a photo when the ray fires. It reads the
+            env's calibration (camera pose, robot kinematics, controller gains), not its state.
         config: the expert's settings.
 
     Use: ``action = expert.act(obs)`` every step after ``expert.reset(obs)``.
     """
 
     def __init__(self, env: ColorSort, config: ExpertConfig = ExpertConfig()):
-        if not env.use_camera_obs or "sensor" not in env.camera_names:
-            raise ValueError("The expert needs the sensor camera: make the env with use_camera_obs=True "
-                             "and 'sensor' in camera_names")
+        if not env.has_offscreen_renderer:
+            raise ValueError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
         self.env = env
         self.config = config
         self.layout = env.layout
@@ -113,9 +117,14 @@ class SortingExpert:
         self.lead = np.asarray(controller.kd, float) / np.asarray(controller.kp, float)
         self.ik = CupIK(robot.robot_model.get_model(mode="mujoco"), self.home)
         self.cup_yaw = site_yaw(self.ik.cup_pose(self.home)[1])  # a multiple of 90 deg: bins' axes
-        i = env.camera_names.index("sensor")
-        camera = CameraModel.from_sim(env.sim.model._model, env.sim.data._data, "sensor",
-                                      env.camera_widths[i], env.camera_heights[i])
+        self.photo_size: tuple[int, int] | None = None  # (width, height) [px] when taking photos itself
+        if env.use_camera_obs and "sensor" in env.camera_names:
+            i = env.camera_names.index("sensor")
+            width, height = env.camera_widths[i], env.camera_heights[i]
+        else:
+            width = height = config.sensor_image_size
+            self.photo_size = (width, height)
+        camera = CameraModel.from_sim(env.sim.model._model, env.sim.data._data, "sensor", width, height)
         self.sensor = ColorSensor(camera, self.layout, config.perception)
         L = self.layout
         px, py, _ = L.pick_point
@@ -191,6 +200,11 @@ class SortingExpert:
         self.time += self.dt
         return np.concatenate([self._q_cmd, [1.0 if self.suction else -1.0, 1.0 if self.belt_pass else -1.0]])
 
+    def _sensor_image(self, obs: dict) -> np.ndarray:
+        if self.photo_size is None:
+            return np.asarray(obs["sensor_image"])
+        return self.env.camera_image("sensor", *self.photo_size)
+
     def _transition(self, obs: dict, q: np.ndarray) -> None:
         P = Phase
         L = self.layout
@@ -203,7 +217,7 @@ class SortingExpert:
                     self.cycles[-1].done_at = self.time  # a cycle ends with the arm ready again
                 self._enter(P.WAIT_FOR_BOX)
         if self.phase is P.WAIT_FOR_BOX and detected:
-            self.target = self.sensor.box_at_sensor(np.asarray(obs["sensor_image"]))
+            self.target = self.sensor.box_at_sensor(self._sensor_image(obs))
             t = self.target
             pickable = t is not None and t.complete and t.color in BIN_COLORS
             self.cycles.append(Cycle(t.color if t is not None else "none", self.time,

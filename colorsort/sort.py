@@ -7,7 +7,8 @@ Example::
 
 prints one line per box (colour seen, true colour, bin, cycle time) and a summary (correct,
 misplaced, dropped, rejected, boxes per minute of sim time); ``--video`` films the scene camera
-with an overlay (phase, colour seen, bin counts); ``--json`` writes the summary. Exit status 0
+with an overlay (phase, colour seen, bin counts) and writes a contact sheet of it beside it
+(same name, ``.png``); ``--json`` writes the summary. Exit status 0
 when it ran, whatever the score; 2 for bad arguments.
 """
 
@@ -26,7 +27,9 @@ from tqdm import tqdm
 from colorsort.config import BIN_COLORS, PRESETS, ROBOT_JOINT_SPEEDS, ROBOTS, make_config
 from colorsort.env import ColorSort
 from colorsort.expert import SortingExpert
-from colorsort.video import VideoWriter
+from colorsort.video import VideoWriter, contact_sheet, save_png
+
+SHEET_TILE_WIDTH = 320  # [px] frames kept for the contact sheet are shrunk to this width
 
 
 @dataclass(frozen=True)
@@ -92,14 +95,9 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
     """Run the expert as ``config`` says and return the report; ``log`` gets one line per box."""
     task = make_config(config.preset)
     limit = time_limit_for(config.boxes, task.spawn_period, task.belt_speed)
-    cameras, heights, widths = ["sensor"], [128], [128]
-    if config.video:
-        cameras.append("scene")
-        heights.append(config.video_size[0])
-        widths.append(config.video_size[1])
-    env = ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=True, camera_names=cameras,
-                    camera_heights=heights, camera_widths=widths, ignore_done=True, seed=config.seed,
-                    time_limit=limit)
+    h, w = config.video_size
+    env = ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=bool(config.video), camera_names="scene",
+                    camera_heights=h, camera_widths=w, ignore_done=True, seed=config.seed, time_limit=limit)
     obs = env.reset()
     expert = SortingExpert(env)
     expert.reset(obs)
@@ -108,6 +106,7 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
     vmax = np.array(ROBOT_JOINT_SPEEDS[config.robot])
     handled: dict[int, int] = {}  # box serial -> index of the expert's cycle
     reported = 0
+    thumbs: list[np.ndarray] = []
     bar = tqdm(total=config.boxes, unit="box", disable=not progress, desc="sorting")
     try:
         while len(env.events) < config.boxes and env.cur_time < limit:
@@ -121,7 +120,12 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
             speed = float(np.max(np.abs(obs["robot0_joint_vel"]) / vmax))
             report.peak_speed_ratio = max(report.peak_speed_ratio, speed)
             if writer is not None:
-                writer.write(_overlay(obs["scene_image"], expert, env))
+                frame = _overlay(obs["scene_image"], expert, env)
+                writer.write(frame)
+                if env.timestep % 4 == 1:
+                    h, w = frame.shape[:2]
+                    thumbs.append(cv2.resize(frame, (SHEET_TILE_WIDTH, h * SHEET_TILE_WIDTH // w),
+                                             interpolation=cv2.INTER_AREA))
             for event in env.events[reported:]:
                 cycle = expert.cycles[handled[event.serial]] if event.serial in handled else None
                 cycle_time = None if cycle is None else event.time - cycle.detected_at
@@ -138,6 +142,8 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
         bar.close()
         if writer is not None:
             writer.close()
+            if thumbs:
+                save_png(Path(config.video).with_suffix(".png"), contact_sheet(thumbs))
         env.close()
     report.sim_time_s = env.events[-1].time if len(env.events) >= config.boxes else env.cur_time
     report.boxes_per_minute = 60.0 * len(report.boxes) / report.sim_time_s if report.sim_time_s > 0 else 0.0
@@ -205,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
         Path(config.json).write_text(json.dumps(report.to_json(), indent=2))
         print(f"summary: {config.json}")
     if config.video:
-        print(f"video: {config.video}")
+        print(f"video: {config.video}  contact sheet: {Path(config.video).with_suffix('.png')}")
     return 0
 
 

@@ -70,3 +70,31 @@ def read_video(path: str | Path) -> np.ndarray:
     """Decode an mp4 into RGB frames, shape (T, H, W, 3) uint8."""
     with av.open(str(path)) as container:
         return np.stack([f.to_ndarray(format="rgb24") for f in container.decode(video=0)])
+
+
+def contact_sheet(frames: list[np.ndarray], columns: int = 4, rows: int = 3, fps: float | None = None,
+                  width: int = 1280) -> np.ndarray:
+    """A grid of ``columns x rows`` frames picked evenly from first to last, for a quick look.
+
+    Args:
+        frames: RGB frames (H, W, 3) uint8, all the same size.
+        columns, rows: the grid.
+        fps: if given, each tile is labelled with its time [s].
+        width: width of the sheet [px]; tiles keep the frames' aspect ratio.
+    """
+    if not frames:
+        raise ValueError("contact_sheet needs at least one frame")
+    picks = np.unique(np.linspace(0, len(frames) - 1, min(columns * rows, len(frames))).round().astype(int))
+    h, w = frames[0].shape[:2]
+    tile_w = width // columns
+    tile_h = max(1, round(h * tile_w / w))
+    sheet = np.full((tile_h * int(np.ceil(len(picks) / columns)), tile_w * columns, 3), 255, np.uint8)
+    for n, k in enumerate(picks):
+        tile = cv2.resize(frames[k], (tile_w, tile_h), interpolation=cv2.INTER_AREA)
+        if fps:
+            label = f"{k / fps:.2f} s"
+            cv2.putText(tile, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
+            cv2.putText(tile, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
+        r, c = divmod(n, columns)
+        sheet[r * tile_h : (r + 1) * tile_h, c * tile_w : (c + 1) * tile_w] = tile
+    return sheet

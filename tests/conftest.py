@@ -26,3 +26,17 @@ def env():
     e.reset()
     yield e
     e.close()
+
+
+TINY = dict(episodes=2, image_size=(64, 64), cameras=("scene", "wrist"))  # two one-box episodes
+
+
+@pytest.fixture(scope="session")
+def tiny_dataset(tmp_path_factory):
+    """Two one-box episodes of the expert, 64x64 scene and wrist cameras, recorded once per session."""
+    from colorsort.collect import CollectConfig, collect
+
+    root = tmp_path_factory.mktemp("datasets") / "tiny"
+    summary = collect(CollectConfig(out=str(root), **TINY), progress=False, log=lambda _: None)
+    assert summary.kept == 2 and not summary.errors, summary
+    return root
