@@ -501,7 +501,7 @@ class ColorSort(ManipulationEnv):
 
         MuJoCo's state (``MJ_STATE_SPEC``: time, qpos, qvel, controls, active equalities, mocap
         and the solver's warm start, so that stepping on from it is bit-exact), then per pooled
-        box its colour (index in ``config.COLORS``), status, bin (index in ``BIN_COLORS`` or -1)
+        box its colour (index in ``config.COLORS``, -1 while parked), status, bin (index in ``BIN_COLORS`` or -1)
         and serial, then the seal (held box or -1, its weld's ``eq_data``), then the belt-pass
         command, the belt and ray flags, the next spawn time [s], the next serial, the env's
         clock [s], and the env's random generator (PCG64, in 32-bit words). Applied forces (``qfrc_applied``, ``xfrc_applied``) are left out: ColorSort
@@ -511,7 +511,7 @@ class ColorSort(ManipulationEnv):
         mj = np.empty(mujoco.mj_stateSize(m, MJ_STATE_SPEC))
         mujoco.mj_getState(m, d, mj, MJ_STATE_SPEC)
         colors, statuses = list(COLORS), list(BoxStatus)
-        boxes = [(colors.index(b.color), statuses.index(b.status),
+        boxes = [(colors.index(b.color) if b.status is not BoxStatus.PARKED else -1, statuses.index(b.status),
                   BIN_COLORS.index(b.bin) if b.bin is not None else -1, b.serial) for b in self.boxes]
         held = self.seal.held if self.seal.held is not None else -1
         weld = m.eq_data[self.seal.welds[held]] if held >= 0 else np.zeros(mujoco.mjNEQDATA)
@@ -535,9 +535,11 @@ class ColorSort(ManipulationEnv):
         boxes = state[n_mj : n_mj + 4 * len(self.boxes)].reshape(-1, 4).astype(int)
         colors, statuses = list(COLORS), list(BoxStatus)
         for box, (color, status, bin_index, serial) in zip(self.boxes, boxes):
-            box.color, box.status, box.serial = colors[color], statuses[status], int(serial)
+            box.status, box.serial = statuses[status], int(serial)
             box.bin = BIN_COLORS[bin_index] if bin_index >= 0 else None
-            m.geom_rgba[self._box_geom[box.index]] = COLORS[box.color]
+            if color >= 0:  # a parked box's colour is whatever it last had: out of sight, not part of the state
+                box.color = colors[color]
+                m.geom_rgba[self._box_geom[box.index]] = COLORS[box.color]
             self._set_collidable(box, box.status is not BoxStatus.PARKED)
             m.body_gravcomp[self._box_body[box.index]] = float(box.status is BoxStatus.PARKED)
         rest = state[n_mj + 4 * len(self.boxes) :]

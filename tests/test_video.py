@@ -24,3 +24,4 @@ def test_sort_films_every_step_with_an_overlay(tmp_path):
     assert frames.shape == (int(round(report.sim_time_s / 0.05)), 120, 160, 3)  # one frame per 20 Hz step
     assert frames[0].std() > 10  # a picture, not a blank frame
     assert frames[:, :12, :80].max() > 230  # the overlay's white text in the top-left corner
+    assert path.with_suffix(".png").stat().st_size > 1000  # the contact sheet beside it

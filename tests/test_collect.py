@@ -1,0 +1,113 @@
+"""The collector: refuses to overwrite, resumes after an interruption, and is worker-count independent."""
+
+import json
+import shutil
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from conftest import TINY
+
+from colorsort import collect as collect_module
+from colorsort.collect import MARKER, CollectConfig, collect, main, parse_image_size, split
+from colorsort.expert import SortingExpert
+
+
+def data_table(root):
+    """Every frame's columns, in dataset order (one parquet file at this size)."""
+    (path,) = sorted((root / "data").rglob("*.parquet"))
+    return pq.read_table(path).to_pydict()
+
+
+def snapshot(root):
+    return {p.relative_to(root): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(cameras=("top",)), "scene"), (dict(fps=30), "Valid values"), (dict(vcodec="mjpeg"), "h264"),
+    (dict(preset="nope"), "Valid presets"), (dict(robot="KUKA"), "Valid robots"),
+    (dict(image_size=(63, 64)), "even"), (dict(workers=0), "valid values"),
+    (dict(resume=True, overwrite=True), "not both"),
+])
+def test_bad_settings_name_the_valid_choices(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        CollectConfig(**kwargs)
+
+
+def test_image_size_and_split():
+    assert parse_image_size("96") == (96, 96) and parse_image_size("96x128") == (96, 128)
+    with pytest.raises(ValueError):
+        parse_image_size("big")
+    assert split(list(range(5)), 2) == [[0, 1, 2], [3, 4]] and split([7], 3) == [[7]]
+
+
+def test_an_existing_dataset_is_never_overwritten_silently(tiny_dataset, tmp_path, capsys):
+    copy = tmp_path / "copy"
+    shutil.copytree(tiny_dataset, copy)
+    before = snapshot(copy)
+    with pytest.raises(FileExistsError, match="--resume"):
+        collect(CollectConfig(out=str(copy), **TINY), progress=False)
+    assert main(["--out", str(copy), "--episodes", "2", "--image-size", "64"]) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert snapshot(copy) == before
+
+
+def test_overwrite_refuses_a_folder_that_is_not_a_dataset(tmp_path):
+    (tmp_path / "notes.txt").write_text("keep me")
+    with pytest.raises(FileExistsError, match="not a LeRobot dataset"):
+        collect(CollectConfig(out=str(tmp_path), overwrite=True, **TINY), progress=False)
+    assert (tmp_path / "notes.txt").read_text() == "keep me"
+
+
+def test_resume_with_other_settings_is_refused(tiny_dataset, tmp_path):
+    copy = tmp_path / "copy"
+    shutil.copytree(tiny_dataset, copy)
+    with pytest.raises(ValueError, match="other settings"):
+        collect(CollectConfig(out=str(copy), resume=True, **{**TINY, "image_size": (96, 96)}), progress=False)
+
+
+def test_interrupted_run_keeps_finished_episodes_and_resume_completes_it(tiny_dataset, tmp_path, monkeypatch):
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    out = tmp_path / "ds"
+    steps = {"n": 0}
+    act = SortingExpert.act
+
+    def act_then_ctrl_c(self, obs):  # Ctrl-C in the middle of the second episode
+        steps["n"] += 1
+        if steps["n"] == 200:
+            raise KeyboardInterrupt
+        return act(self, obs)
+
+    monkeypatch.setattr(SortingExpert, "act", act_then_ctrl_c)
+    summary = collect(CollectConfig(out=str(out), **TINY), progress=False, log=lambda _: None)
+    assert summary.interrupted and summary.kept == 1
+    assert LeRobotDataset("local/colorsort", root=out, video_backend="pyav").num_episodes == 1  # loadable
+    assert json.loads((out / MARKER).read_text())["tried"] == [0]
+    assert not (tmp_path / ".ds.staging").exists()
+
+    monkeypatch.setattr(SortingExpert, "act", act)
+    summary = collect(CollectConfig(out=str(out), resume=True, **TINY), progress=False, log=lambda _: None)
+    assert summary.kept == 1 and summary.tried == 1 and not summary.interrupted
+    resumed = LeRobotDataset("local/colorsort", root=out, video_backend="pyav")
+    assert resumed.num_episodes == 2
+    assert data_table(out)["sim_state"] == data_table(tiny_dataset)["sim_state"]  # same as one straight run
+    assert resumed[len(resumed) - 1]["observation.images.scene"].shape == (3, 64, 64)  # videos joined too
+
+
+def test_same_seeds_give_the_same_data_whatever_the_worker_count(tiny_dataset, tmp_path):
+    out = tmp_path / "two_workers"
+    summary = collect(CollectConfig(out=str(out), workers=2, **TINY), progress=False, log=lambda _: None)
+    assert summary.kept == 2 and not summary.errors
+    one, two = data_table(tiny_dataset), data_table(out)
+    assert one.keys() == two.keys()
+    for key in one:
+        assert np.array_equal(np.asarray(one[key]), np.asarray(two[key])), key
+    assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]
+
+
+def test_failed_episodes_are_tried_counted_and_not_kept(tmp_path, monkeypatch):
+    monkeypatch.setattr(collect_module, "episode_time_limit", lambda config: 1.0)  # no box gets sorted in 1 s
+    summary = collect(CollectConfig(out=str(tmp_path / "ds"), **TINY), progress=False, log=lambda _: None)
+    assert summary.tried == 2 and summary.kept == 0 and summary.not_kept == {"timeout": 2}
+    assert not (tmp_path / "ds").exists()
