@@ -185,7 +185,8 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
 
     from colorsort.dataset import features, frame, task_text
 
-    av.logging.set_level(av.logging.ERROR)  # FFmpeg's notes on every file it writes
+    av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's notes on every file it writes (lerobot restores
+    # FFmpeg's own log callback, which prints at this level)
     from colorsort.expert import SortingExpert
 
     out = ShardReport(str(root))

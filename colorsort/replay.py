@@ -84,8 +84,11 @@ def _episode_frames(root: Path, meta, index: int) -> dict:
 
 def recorded_frames(episode: RecordedEpisode, camera: str) -> np.ndarray:
     """The dataset's frames of ``camera`` for this episode, decoded: (T, H, W, 3) uint8."""
+    import av
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.video_utils import decode_video_frames
+
+    av.logging.set_libav_level(av.logging.ERROR)
 
     meta = LeRobotDatasetMetadata(episode.settings["repo_id"], root=episode.root)
     key = image_key(camera)
