@@ -33,7 +33,6 @@ import signal
 import sys
 import time
 import traceback
-from collections import Counter
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -48,7 +47,7 @@ os.environ.setdefault("HF_DATASETS_DISABLE_PROGRESS_BARS", "1")  # one bar per e
 # Mesa's CPU renderer draws 128 px frames ~10% faster in the calling thread than with helper
 # threads, and leaves the other cores to the video encoder and to other workers.
 os.environ.setdefault("LP_NUM_THREADS", "0")
-from colorsort.env import CAMERAS
+from colorsort.env import CAMERAS  # noqa: E402
 
 FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
 VCODECS = ("h264", "libsvtav1", "hevc")
@@ -121,7 +120,6 @@ class ShardReport:
 
     root: str
     kept: list[int] = field(default_factory=list)  # episode numbers saved, in order
-    frames: int = 0
     interrupted: bool = False
     error: str | None = None
     seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(
@@ -236,7 +234,6 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
             if reason == "ok":
                 dataset.save_episode()
                 out.kept.append(index)
-                out.frames += frames
             else:
                 dataset.clear_episode_buffer()
             sec["episode saving"] += time.perf_counter() - t

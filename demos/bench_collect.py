@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import tempfile
 from dataclasses import replace
 from pathlib import Path
@@ -43,7 +44,10 @@ def main() -> None:
         base = CollectConfig(episodes=args.episodes, cameras=tuple(args.cameras.split(",")),
                              image_size=parse_image_size(args.image_size), fps=args.fps, vcodec=args.vcodec,
                              out=str(Path(tmp) / "w1"))
+        before = resource.getrusage(resource.RUSAGE_SELF)
         one = run(base)
+        after = resource.getrusage(resource.RUSAGE_SELF)
+        cores = (after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime) / one.wall_s
         two = run(replace(base, workers=2, out=str(Path(tmp) / "w2")))
         size = one.size_mb
 
@@ -54,6 +58,8 @@ def main() -> None:
     for n, s in ((1, one), (2, two)):
         print(f"{n:>8} {s.sim_time_s:8.1f} {s.wall_s:8.1f} {s.real_time_factor:16.2f}x")
     print(f"2 workers / 1 worker: {two.real_time_factor / one.real_time_factor:.2f}x")
+    print(f"1 worker kept {cores:.2f} cores busy on average (CPU time / wall time: its video encoder runs in "
+          f"threads), so {os.cpu_count()} cores allow at most {os.cpu_count() / cores:.2f}x with more workers")
     print(f"dataset: {one.dataset_frames} frames, {size:.1f} MB ({1e3 * size / one.dataset_frames:.1f} kB per frame)")
 
     print("\nwhere the time goes [s, summed over workers]")

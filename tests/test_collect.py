@@ -111,3 +111,17 @@ def test_failed_episodes_are_tried_counted_and_not_kept(tmp_path, monkeypatch):
     summary = collect(CollectConfig(out=str(tmp_path / "ds"), **TINY), progress=False, log=lambda _: None)
     assert summary.tried == 2 and summary.kept == 0 and summary.not_kept == {"timeout": 2}
     assert not (tmp_path / "ds").exists()
+
+
+def test_cli_records_several_boxes_per_episode_and_prints_the_summary(tmp_path, capsys):
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    out = tmp_path / "two_boxes"
+    assert main(["--episodes", "1", "--boxes-per-episode", "2", "--cameras", "sensor", "--image-size", "32",
+                 "--out", str(out), "--repo-id", "test/two-boxes"]) == 0
+    printed = capsys.readouterr().out
+    assert "tried 1, kept 1" in printed and "MB on disk" in printed and "LeRobotDataset('test/two-boxes'" in printed
+    ds = LeRobotDataset("test/two-boxes", root=out, video_backend="pyav")
+    assert ds.meta.episodes[0]["tasks"] == ["Sort the next 2 boxes from the conveyor into the bins of their colours."]
+    assert ds.num_frames > 200  # two boxes: the second rides in behind the first
+    assert tuple(ds[0]["observation.images.sensor"].shape) == (3, 32, 32)
