@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -31,6 +32,9 @@ from colorsort.collect import MARKER, parse_image_size
 from colorsort.dataset import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
 from colorsort.env import CAMERAS, ColorSort
 from colorsort.video import VideoWriter, contact_sheet, save_png
+
+warnings.filterwarnings("ignore", message="Cannot enable progress bars")  # datasets, when HF_DATASETS_DISABLE_PROGRESS_BARS is set
+warnings.filterwarnings("ignore", message="The video decoding and encoding capabilities of torchvision are deprecated")
 
 MIN_PSNR_DB = 24.0  # re-rendered vs decoded frames, worst frame: measured 26.6 dB at 64 px, 29.1 dB at 128 px (h264, crf 30)
 
