@@ -51,5 +51,6 @@ setup(
         "colorsort-sort=colorsort.sort:main",
         "colorsort-collect=colorsort.collect:main",
         "colorsort-replay=colorsort.replay:main",
+        "colorsort-eval=colorsort.evaluate:main",
     ]},
 )

@@ -1,7 +1,9 @@
 """ColorSort: an ABB IRB 140 with a vacuum cup sorts coloured boxes off a conveyor.
 
 Importing the package registers the ``IRB140`` robot, the ``SuctionGripper`` and the
-``ColorSort`` task with robosuite, so that ``suite.make("ColorSort", robots="IRB140")`` works.
+``ColorSort`` task with robosuite, so that ``suite.make("ColorSort", robots="IRB140")`` works,
+and the Gymnasium ids ``colorsort/ColorSort-v0`` and one per benchmark variant
+(``colorsort.variants``), so that ``gym.make("colorsort/ColorSort-v0")`` works.
 """
 
 from colorsort.rendering import ensure_gl_backend, gl_error, is_gl_failure
@@ -15,5 +17,9 @@ except Exception as error:  # robosuite loads its GL context module at import ti
     if is_gl_failure(error):
         raise gl_error(error) from error
     raise
+
+from colorsort.gym_env import register_envs  # noqa: E402
+
+register_envs()
 
 __all__ = ["ColorSort", "models"]

@@ -1,0 +1,143 @@
+"""ColorSort as a Gymnasium env with LeRobot's conventions for simulated tasks.
+
+``import colorsort`` registers ``colorsort/ColorSort-v0`` (the ``default`` variant) and one id
+per variant (``colorsort.variants``)::
+
+    import gymnasium as gym, colorsort
+    env = gym.make("colorsort/ColorSort-Jitter-v0", cameras=("scene", "wrist"), image_size=(128, 128))
+    obs, info = env.reset(seed=0)   # obs["pixels"]["scene"]: (128, 128, 3) uint8; obs["agent_pos"]: (23,)
+
+Observations: ``pixels`` (a dict of camera images, (H, W, 3) uint8), ``agent_pos``
+(``observation.state`` of the datasets) and ``environment_state`` (the next box: colour one-hot,
+pose). Actions: the datasets' ``action`` (joint targets [rad], suction, belt pass), float32.
+Reward: +1 per box in its colour's bin, -1 per box misplaced or dropped. An episode terminates
+when the variant's number of boxes has left the belt (``info["is_success"]`` when each went where
+it belongs) or at the first box misplaced or dropped; it is truncated at the variant's step limit.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from colorsort.config import COLORS
+from colorsort.dataset import box_state, robot_state, state_names
+from colorsort.env import ColorSort
+from colorsort.lighting import LightRig
+from colorsort.variants import Variant, get_variant, is_distractor
+
+
+class ColorSortGymEnv(gym.Env):
+    """One variant of the task, as a Gymnasium env.
+
+    Args:
+        variant: a name from ``colorsort.variants.VARIANTS``, or a ``Variant``.
+        cameras: the cameras in ``obs["pixels"]``, any of "scene", "sensor", "wrist".
+        image_size: (height, width) of every camera [px].
+        fps: control rate [Hz].
+        render_mode: "rgb_array" (the scene camera at ``image_size``) or None.
+        max_episode_steps: truncate after this many steps; default: the variant's time limit.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+
+    def __init__(self, variant: str | Variant = "default", cameras: tuple[str, ...] = ("scene", "wrist"),
+                 image_size: tuple[int, int] = (128, 128), fps: int = 20, render_mode: str | None = "rgb_array",
+                 max_episode_steps: int | None = None):
+        self.variant = get_variant(variant) if isinstance(variant, str) else variant
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode={render_mode!r}; valid modes: [None, 'rgb_array']")
+        self.render_mode = render_mode
+        self.cameras = tuple(cameras)
+        self.image_size = tuple(image_size)
+        h, w = self.image_size
+        self.env = ColorSort(robots=self.variant.robot, config=self.variant.task_config, use_camera_obs=True,
+                             camera_names=list(self.cameras), camera_heights=h, camera_widths=w,
+                             control_freq=fps, ignore_done=True)
+        self.lights = LightRig(self.env.sim.model._model)
+        self.max_episode_steps = max_episode_steps or int(np.ceil(self.variant.time_limit * fps))
+        self.metadata = {**self.metadata, "render_fps": fps}
+        n_state = len(state_names(self.env))
+        self.observation_space = spaces.Dict({
+            "pixels": spaces.Dict({c: spaces.Box(0, 255, (h, w, 3), np.uint8) for c in self.cameras}),
+            "agent_pos": spaces.Box(-np.inf, np.inf, (n_state,), np.float32),
+            "environment_state": spaces.Box(-np.inf, np.inf, (len(COLORS) + 8,), np.float32),
+        })
+        low, high = self.env.action_spec
+        self.action_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+        self.raw_obs: dict[str, Any] = {}  # the robosuite observation behind the last one returned
+        self.steps = 0
+
+    # ------------------------------------------------------------------ gym API
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        episode_seed = int(self.np_random.integers(2**31)) if seed is None else int(seed)
+        self.raw_obs = self.env.reset(seed=episode_seed)
+        self.lights.apply(self.variant.lighting(self.env.rng))  # lights only: box and bin colours stay
+        if self.variant.random_lights:
+            self.raw_obs = self.env._get_observations(force_update=True)  # re-render under the new lights
+        self.steps = 0
+        return self._observation(), self._info()
+
+    def step(self, action: np.ndarray):
+        action = np.asarray(action, dtype=np.float32)
+        self.raw_obs, reward, _, _ = self.env.step(action)
+        self.steps += 1
+        info = self._info()
+        terminated = info["is_success"] or info["failed"]
+        truncated = not terminated and self.steps >= self.max_episode_steps
+        return self._observation(), float(reward), bool(terminated), bool(truncated), info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            return None
+        h, w = self.image_size
+        if "scene_image" in self.raw_obs:
+            return self.raw_obs["scene_image"]
+        return self.env.camera_image("scene", w, h)
+
+    def close(self) -> None:
+        self.env.close()
+
+    def task_description(self) -> str:
+        """The instruction for LeRobot's language-conditioned policies."""
+        return f"Sort the next {self.variant.boxes} boxes from the conveyor into the bins of their colours."
+
+    # ------------------------------------------------------------------ helpers
+    def _observation(self) -> dict[str, Any]:
+        return {
+            "pixels": {c: self.raw_obs[f"{c}_image"] for c in self.cameras},
+            "agent_pos": robot_state(self.env, self.raw_obs),
+            "environment_state": box_state(self.env),
+        }
+
+    def _info(self) -> dict[str, Any]:
+        events = self.env.events[: self.variant.boxes]
+        wrong = [e for e in events if e.outcome in ("misplaced", "dropped")]
+        done = len(events) >= self.variant.boxes
+        return {
+            "is_success": done and not wrong,
+            "failed": bool(wrong),
+            "correct": sum(e.outcome == "placed" for e in events),
+            "misplaced": sum(e.outcome == "misplaced" for e in events),
+            "dropped": sum(e.outcome == "dropped" for e in events),
+            "let_through": sum(e.outcome == "rejected" and is_distractor(e.color) for e in events),
+            "distractors": sum(is_distractor(e.color) for e in events),
+            "boxes_done": len(events),
+            "event_times": [e.time for e in events],
+            "sim_time": self.env.cur_time,
+        }
+
+
+def register_envs() -> None:
+    """Register ``colorsort/ColorSort-v0`` and every variant's id with Gymnasium (idempotent)."""
+    from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
+
+    ids = {DEFAULT_GYM_ID: "default", **{v.gym_id: name for name, v in VARIANTS.items()}}
+    for gym_id, name in ids.items():
+        if gym_id not in gym.registry:
+            gym.register(id=gym_id, entry_point="colorsort.gym_env:ColorSortGymEnv", kwargs={"variant": name},
+                         disable_env_checker=True)

@@ -1,0 +1,100 @@
+"""Policies the evaluation harness runs: the scripted expert, a random policy, a LeRobot checkpoint.
+
+Each takes Gymnasium observations of a ``ColorSortGymEnv`` and returns its action (float32):
+``policy.reset(env, seed)`` at the start of every episode, then ``policy.act(obs)`` every step.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from colorsort.gym_env import ColorSortGymEnv
+
+
+class Policy(Protocol):
+    name: str
+
+    def reset(self, env: ColorSortGymEnv, seed: int) -> None: ...
+
+    def act(self, obs: dict[str, Any]) -> np.ndarray: ...
+
+
+class ExpertPolicy:
+    """The scripted expert (``colorsort.expert``): it reads the robosuite observation behind ``obs``."""
+
+    name = "expert"
+
+    def reset(self, env: ColorSortGymEnv, seed: int) -> None:
+        from colorsort.expert import SortingExpert
+
+        self.env = env
+        if getattr(self, "_for", None) is not env.env:  # the expert's IK and drop points: once per env
+            self.expert, self._for = SortingExpert(env.env), env.env
+        self.expert.reset(env.raw_obs)
+
+    def act(self, obs: dict[str, Any]) -> np.ndarray:
+        return self.expert.act(self.env.raw_obs).astype(np.float32)
+
+
+class RandomPolicy:
+    """Actions drawn uniformly from the action space, from a generator seeded per episode."""
+
+    name = "random"
+
+    def reset(self, env: ColorSortGymEnv, seed: int) -> None:
+        self.space = env.action_space
+        self.rng = np.random.default_rng(seed)
+
+    def act(self, obs: dict[str, Any]) -> np.ndarray:
+        return self.rng.uniform(self.space.low, self.space.high).astype(np.float32)
+
+
+class LeRobotPolicy:
+    """A LeRobot checkpoint (``pretrained_model`` folder with its config, weights and processors), on the CPU."""
+
+    def __init__(self, path: str | Path, device: str = "cpu"):
+        from lerobot.configs.policies import PreTrainedConfig
+        from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+
+        path = Path(path)
+        if not (path / "config.json").is_file():
+            raise ValueError(f"{path} is not a LeRobot checkpoint (no config.json); expected e.g. "
+                             "outputs/train/<run>/checkpoints/last/pretrained_model")
+        self.name = str(path)
+        config = PreTrainedConfig.from_pretrained(path)
+        config.pretrained_path, config.device = path, device
+        self.policy = get_policy_class(config.type).from_pretrained(path, config=config)
+        self.policy.eval()
+        self.preprocessor, self.postprocessor = make_pre_post_processors(
+            policy_cfg=config, pretrained_path=str(path), preprocessor_overrides={"device_processor": {"device": device}})
+
+    def reset(self, env: ColorSortGymEnv, seed: int) -> None:
+        import torch
+
+        torch.manual_seed(seed)
+        self.task = env.task_description()
+        self.policy.reset()
+
+    def act(self, obs: dict[str, Any]) -> np.ndarray:
+        import torch
+        from lerobot.envs.utils import preprocess_observation
+
+        batch = preprocess_observation(obs)
+        batch["task"] = [self.task]
+        with torch.no_grad():
+            action = self.postprocessor(self.policy.select_action(self.preprocessor(batch)))
+        return action.to("cpu").numpy()[0].astype(np.float32)
+
+
+def make_policy(spec: str) -> Policy:
+    """``"expert"``, ``"random"`` or the path of a LeRobot checkpoint."""
+    if spec == "expert":
+        return ExpertPolicy()
+    if spec == "random":
+        return RandomPolicy()
+    if Path(spec).exists():
+        return LeRobotPolicy(spec)
+    raise ValueError(f"Unknown policy {spec!r}: give 'expert', 'random' or a LeRobot checkpoint folder")

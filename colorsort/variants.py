@@ -1,0 +1,106 @@
+"""The benchmark suite: named, versioned task variants, each with fixed evaluation seeds.
+
+A variant fixes everything an evaluation depends on: the robot, the task parameters, how many
+boxes make an episode, the step limit, domain randomisation, and the seeds. Domain
+randomisation changes lights only (brightness and colour temperature of every light); it never
+touches a box's or a bin's colour.
+
+Gymnasium ids: ``colorsort/ColorSort-v0`` is the ``default`` variant; each variant ``name`` is
+also ``colorsort/ColorSort-<Name>-v<version>`` (see ``Variant.gym_id``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from colorsort.config import BIN_COLORS, COLORS, ROBOTS, TaskConfig, make_config
+from colorsort.lighting import Lighting
+
+EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One benchmark task.
+
+    Attributes:
+        name: lower-case name, e.g. "default".
+        version: bumped whenever anything below changes what an episode is.
+        description: one line for tables.
+        robot: "IRB140", "Panda" or "UR5e".
+        preset: the ``TaskConfig`` preset the task starts from.
+        overrides: ``TaskConfig`` fields changed from the preset, as (name, value) pairs.
+        boxes: an episode ends when this many boxes have left the belt (success if each went
+            where it belongs: its colour's bin, or past the end of the belt if it has no bin).
+        random_lights: draw a brightness in [0.5, 1.6] and a colour temperature between warm
+            (1, 0.8, 0.6) and cold (0.7, 0.85, 1) for every episode.
+        seeds: the evaluation seeds, one episode each.
+    """
+
+    name: str
+    version: int
+    description: str
+    robot: str = "IRB140"
+    preset: str = "default"
+    overrides: tuple[tuple[str, object], ...] = ()
+    boxes: int = 3
+    random_lights: bool = False
+    seeds: tuple[int, ...] = field(default=EVAL_SEEDS)
+
+    def __post_init__(self) -> None:
+        if self.robot not in ROBOTS:
+            raise ValueError(f"Unknown robot {self.robot!r}. Valid robots: {list(ROBOTS)}")
+        self.task_config  # validates the preset and overrides
+
+    @property
+    def task_config(self) -> TaskConfig:
+        return make_config(self.preset, **dict(self.overrides))
+
+    @property
+    def gym_id(self) -> str:
+        parts = "".join(p.capitalize() for p in self.name.split("-"))
+        return f"colorsort/ColorSort-{parts}-v{self.version}"
+
+    @property
+    def time_limit(self) -> float:
+        """[s] sim time after which an episode is truncated: a slow but working policy never gets there."""
+        t = self.task_config
+        return 3.0 * self.boxes * t.spawn_period + 60.0 + 1.5 / t.belt_speed
+
+    def lighting(self, rng: np.random.Generator) -> Lighting:
+        """This episode's lights, drawn from ``rng`` (plain lights unless ``random_lights``)."""
+        if not self.random_lights:
+            return Lighting()
+        warm, cold = np.array([1.0, 0.8, 0.6]), np.array([0.7, 0.85, 1.0])
+        mix = rng.uniform()
+        return Lighting(brightness=float(rng.uniform(0.5, 1.6)), tint=tuple(float(v) for v in (1 - mix) * warm + mix * cold))
+
+
+VARIANTS: dict[str, Variant] = {v.name: v for v in (
+    Variant("seed", 0, "the original cell: 0.05 m/s belt, a box every 30 s, bins emptied at 2",
+            preset="seed", boxes=2),
+    Variant("default", 0, "0.2 m/s belt, a box every 4 s"),
+    Variant("fast", 0, "0.3 m/s belt, a box every 2.5 s", overrides=(("belt_speed", 0.3), ("spawn_period", 2.5))),
+    Variant("jitter", 0, "boxes up to 5 cm off the belt's centre line and turned up to 45 deg",
+            overrides=(("lateral_jitter", 0.05), ("yaw_jitter", 45.0))),
+    Variant("lighting", 0, "every episode under other lights: brightness x0.5-1.6, warm to cold", random_lights=True),
+    Variant("distractors", 0, "yellow and purple boxes too: no bin, must be let through", boxes=4,
+            overrides=(("box_colors", tuple(COLORS)),)),
+    Variant("robots-panda", 0, "the default task with a Franka Panda and the suction cup", robot="Panda"),
+    Variant("robots-ur5e", 0, "the default task with a UR5e and the suction cup", robot="UR5e"),
+)}
+DEFAULT_GYM_ID = "colorsort/ColorSort-v0"
+
+
+def get_variant(name: str) -> Variant:
+    """The variant called ``name``; ValueError naming the valid ones otherwise."""
+    if name not in VARIANTS:
+        raise ValueError(f"Unknown variant {name!r}. Valid variants: {list(VARIANTS)}")
+    return VARIANTS[name]
+
+
+def is_distractor(color: str) -> bool:
+    """A box colour with no bin: the right thing is to let it pass."""
+    return color not in BIN_COLORS
