@@ -133,3 +133,31 @@ def test_eval_cli_writes_the_json(tmp_path, capsys):
     data = json.loads(path.read_text())
     assert {"success_rate", "episodes", "correct", "misplaced", "dropped", "boxes_per_minute"} <= set(data)
     assert "success rate" in capsys.readouterr().out
+
+
+def test_lerobot_train_then_lerobot_eval_run_offline_on_the_cpu(tiny_dataset, tmp_path):
+    """The documented commands: lerobot-train on a collected dataset (3 steps), lerobot-eval on ColorSort."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bin_dir = Path(sys.executable).parent
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    train = subprocess.run([
+        str(bin_dir / "lerobot-train"), "--dataset.repo_id=local/colorsort", f"--dataset.root={tiny_dataset}",
+        "--dataset.video_backend=pyav", "--policy.type=act", "--policy.device=cpu", "--policy.push_to_hub=false",
+        "--policy.pretrained_backbone_weights=null", "--policy.dim_model=64", "--policy.dim_feedforward=128",
+        "--policy.n_encoder_layers=1", "--policy.chunk_size=10", "--policy.n_action_steps=10", "--steps=3",
+        "--batch_size=2", "--num_workers=0", "--save_freq=3", "--eval_freq=0", "--wandb.enable=false",
+        f"--output_dir={tmp_path / 'train'}"], env=env, capture_output=True, text=True, timeout=300)
+    assert train.returncode == 0, train.stderr[-3000:]
+    checkpoint = tmp_path / "train" / "checkpoints" / "last" / "pretrained_model"
+    assert (checkpoint / "model.safetensors").is_file()
+    evaluation = subprocess.run([
+        str(bin_dir / "lerobot-eval"), "--env.discover_packages_path=colorsort", "--env.type=colorsort",
+        "--env.task=ColorSort-Default-v0", "--env.image_size=64", "--env.episode_length=10",
+        f"--policy.path={checkpoint}", "--policy.device=cpu", "--eval.n_episodes=1", "--eval.batch_size=1",
+        f"--output_dir={tmp_path / 'eval'}"], env=env, capture_output=True, text=True, timeout=300)
+    assert evaluation.returncode == 0, evaluation.stderr[-3000:]
+    assert "'n_episodes': 1" in evaluation.stdout and "pc_success" in evaluation.stdout
