@@ -9,8 +9,9 @@ Example::
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` + k), so the same
 command gives the same numbers. Metrics: success rate (every box of the episode where it belongs,
 none misplaced or dropped) with a 95% Wilson interval; boxes placed correctly, misplaced, dropped;
-distractors (boxes with no bin) let through; boxes per minute (boxes that left the belt per
-minute of sim time); mean cycle time (sim time between consecutive boxes leaving the belt).
+distractors (boxes with no bin) let through; boxes per minute (boxes handled right, placed in
+their bin or let through, per minute of sim time); mean cycle time (sim time between consecutive
+boxes handled right).
 Exit status 0 when it ran, 2 for bad arguments.
 """
 
@@ -81,7 +82,7 @@ def evaluate(policy_spec: str, variant_name: str, episodes: int, seed: int | Non
     env = ColorSortGymEnv(variant, cameras=cameras, image_size=image_size, max_episode_steps=max_episode_steps)
     report = EvalReport(policy=policy.name, variant=variant.name, seeds=seeds)
     cycles: list[float] = []
-    boxes_done = 0
+    handled = 0
     try:
         for s in tqdm(seeds, desc=f"{policy.name} on {variant.name}", unit="episode", disable=not progress):
             obs, info = env.reset(seed=s)
@@ -95,8 +96,8 @@ def evaluate(policy_spec: str, variant_name: str, episodes: int, seed: int | Non
                 setattr(report, key, getattr(report, key) + info[key])
             report.distractors_let_through += info["let_through"]
             report.sim_time_s += info["sim_time"]
-            boxes_done += info["boxes_done"]
-            cycles += list(np.diff(info["event_times"]))
+            handled += len(info["sorted_times"])
+            cycles += list(np.diff(info["sorted_times"]))
             report.per_episode.append({"seed": s, "success": bool(info["is_success"]), "steps": env.steps,
                                        **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through",
                                                                "distractors", "sim_time")}})
@@ -104,7 +105,7 @@ def evaluate(policy_spec: str, variant_name: str, episodes: int, seed: int | Non
         env.close()
     report.success_rate = report.successes / report.episodes
     report.success_ci95 = wilson_interval(report.successes, report.episodes)
-    report.boxes_per_minute = 60.0 * boxes_done / report.sim_time_s if report.sim_time_s > 0 else 0.0
+    report.boxes_per_minute = 60.0 * handled / report.sim_time_s if report.sim_time_s > 0 else 0.0
     report.mean_cycle_time_s = float(np.mean(cycles)) if cycles else None
     return report
 

@@ -127,7 +127,8 @@ class ColorSortGymEnv(gym.Env):
             "let_through": sum(e.outcome == "rejected" and is_distractor(e.color) for e in events),
             "distractors": sum(is_distractor(e.color) for e in events),
             "boxes_done": len(events),
-            "event_times": [e.time for e in events],
+            "sorted_times": [e.time for e in events if e.outcome == "placed"
+                             or (e.outcome == "rejected" and is_distractor(e.color))],  # [s] boxes handled right
             "sim_time": self.env.cur_time,
         }
 

@@ -1,0 +1,51 @@
+"""Baselines: the scripted expert and a random policy on every benchmark variant.
+
+    python demos/bench_suite.py [--episodes 10] [--workers 2] [--image-size 64]
+
+Runs ``colorsort.evaluate.evaluate`` for each (policy, variant) pair on the variant's fixed
+evaluation seeds, the pairs spread over worker processes, and prints one Markdown table row per
+pair (what README's baseline table shows). Camera size does not change what these two policies
+do (the expert takes its own 128 px sensor photo), so small images keep it fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ.setdefault("HF_HUB_OFFLINE", "1")
+
+from colorsort.evaluate import EvalReport, evaluate  # noqa: E402
+from colorsort.variants import VARIANTS  # noqa: E402
+
+
+def run(job: tuple[str, str, int, int]) -> EvalReport:
+    policy, variant, episodes, size = job
+    return evaluate(policy, variant, episodes, image_size=(size, size), progress=False)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--episodes", type=int, default=10)
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--image-size", type=int, default=64)
+    args = p.parse_args()
+    jobs = [(policy, v, args.episodes, args.image_size) for v in VARIANTS for policy in ("expert", "random")]
+    with mp.get_context("spawn").Pool(args.workers) as pool:
+        reports = pool.map(run, jobs, chunksize=1)
+    print(f"{args.episodes} episodes per row, seeds {reports[0].seeds[0]}..{reports[0].seeds[-1]}\n")
+    print("| variant | policy | success rate (95% CI) | correct | misplaced | dropped | distractors let through "
+          "| boxes/min | mean cycle [s] |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for r in reports:
+        lo, hi = r.success_ci95
+        cycle = f"{r.mean_cycle_time_s:.2f}" if r.mean_cycle_time_s is not None else "-"
+        print(f"| {r.variant} | {r.policy} | {100 * r.success_rate:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%) | {r.correct} "
+              f"| {r.misplaced} | {r.dropped} | {r.distractors_let_through}/{r.distractors} | {r.boxes_per_minute:.1f} "
+              f"| {cycle} |")
+
+
+if __name__ == "__main__":
+    main()
