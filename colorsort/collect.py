@@ -40,7 +40,7 @@ from typing import Callable
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.config import PRESETS, ROBOTS, make_config
+from colorsort.config import PRESETS, ROBOTS, make_config, sorting_time_limit
 
 os.environ.setdefault("SVT_LOG", "1")  # the AV1 encoder's banner and info lines: errors only
 os.environ.setdefault("HF_DATASETS_DISABLE_PROGRESS_BARS", "1")  # one bar per episode saved, otherwise
@@ -152,10 +152,7 @@ class CollectSummary:
 # ---------------------------------------------------------------------------------------- recording
 def episode_time_limit(config: CollectConfig) -> float:
     """[s] sim time after which an episode counts as failed."""
-    from colorsort.sort import time_limit_for
-
-    task = make_config(config.preset)
-    return time_limit_for(config.boxes_per_episode, task.spawn_period, task.belt_speed)
+    return sorting_time_limit(config.boxes_per_episode, make_config(config.preset))
 
 
 def make_recording_env(config: CollectConfig):

@@ -140,6 +140,12 @@ PRESETS: dict[str, TaskConfig] = {
 }
 
 
+def sorting_time_limit(boxes: int, task: TaskConfig) -> float:
+    """[s] sim time a working policy never needs for ``boxes`` boxes to leave the belt: three
+    spawn periods per box, plus a minute, plus the ride down the belt."""
+    return 3.0 * boxes * task.spawn_period + 60.0 + 1.5 / task.belt_speed
+
+
 def make_config(preset: str = "default", **overrides: object) -> TaskConfig:
     """A preset's ``TaskConfig`` with fields overridden by keyword.
 

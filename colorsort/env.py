@@ -23,6 +23,9 @@ Reward: +1 per box placed in the bin of its colour, -1 per box misplaced or drop
 Success: ``boxes_to_sort`` boxes placed correctly, none misplaced or dropped.
 Termination: success, failure (a box misplaced or dropped), or ``time_limit`` (the horizon).
 Randomisation: only through ``seed`` (the env's own ``numpy.random.Generator``).
+State: ``get_sim_state()`` returns everything that makes an instant replayable (MuJoCo state,
+    boxes, seal, belt, clock, generator) as one float64 vector; ``set_sim_state`` restores it,
+    after which stepping the same actions retraces the episode bit for bit.
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.config import BIN_COLORS, PRESETS, ROBOT_JOINT_SPEEDS, ROBOTS, make_config
+from colorsort.config import BIN_COLORS, PRESETS, ROBOT_JOINT_SPEEDS, ROBOTS, make_config, sorting_time_limit
 from colorsort.env import ColorSort
 from colorsort.expert import SortingExpert
 from colorsort.video import VideoWriter, contact_sheet, save_png
@@ -86,15 +86,10 @@ class SortReport:
         return asdict(self)
 
 
-def time_limit_for(boxes: int, spawn_period: float, belt_speed: float) -> float:
-    """A sim-time cap [s] that a working expert never reaches: three spawn periods per box, plus travel."""
-    return 3.0 * boxes * spawn_period + 60.0 + 1.5 / belt_speed
-
-
 def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport:
     """Run the expert as ``config`` says and return the report; ``log`` gets one line per box."""
     task = make_config(config.preset)
-    limit = time_limit_for(config.boxes, task.spawn_period, task.belt_speed)
+    limit = sorting_time_limit(config.boxes, task)
     h, w = config.video_size
     env = ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=bool(config.video), camera_names="scene",
                     camera_heights=h, camera_widths=w, ignore_done=True, seed=config.seed, time_limit=limit)

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from colorsort.config import BIN_COLORS, COLORS, ROBOTS, TaskConfig, make_config
+from colorsort.config import BIN_COLORS, COLORS, ROBOTS, TaskConfig, make_config, sorting_time_limit
 from colorsort.lighting import Lighting
 
 EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
@@ -66,8 +66,7 @@ class Variant:
     @property
     def time_limit(self) -> float:
         """[s] sim time after which an episode is truncated: a slow but working policy never gets there."""
-        t = self.task_config
-        return 3.0 * self.boxes * t.spawn_period + 60.0 + 1.5 / t.belt_speed
+        return sorting_time_limit(self.boxes, self.task_config)
 
     def lighting(self, rng: np.random.Generator) -> Lighting:
         """This episode's lights, drawn from ``rng`` (plain lights unless ``random_lights``)."""
