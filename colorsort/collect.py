@@ -44,8 +44,8 @@ from colorsort.config import PRESETS, ROBOTS, make_config, sorting_time_limit
 
 os.environ.setdefault("SVT_LOG", "1")  # the AV1 encoder's banner and info lines: errors only
 os.environ.setdefault("HF_DATASETS_DISABLE_PROGRESS_BARS", "1")  # one bar per episode saved, otherwise
-# Mesa's CPU renderer draws 128 px frames ~10% faster in the calling thread than with helper
-# threads, and leaves the other cores to the video encoder and to other workers.
+# Mesa's CPU renderer draws in the calling thread, with no helper threads competing with the
+# video encoder and with other workers for the cores.
 os.environ.setdefault("LP_NUM_THREADS", "0")
 from colorsort.env import CAMERAS  # noqa: E402
 
@@ -69,7 +69,7 @@ class CollectConfig:
     image_size: tuple[int, int] = (128, 128)  # (height, width) of every camera [px]
     fps: int = 20  # frames per second = the env's control rate [Hz]
     workers: int = 1  # processes recording shards side by side
-    vcodec: str = "h264"  # video codec of the camera streams (h264 encodes ~20% faster than libsvtav1 here)
+    vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
 
