@@ -1,7 +1,10 @@
 # Two commands do everything on a fresh machine: `make demo` and `make test`.
 # The virtual environment is rebuilt only when setup.py or overrides.txt change.
-PY ?= python3
+# LeRobot 0.6 needs Python >= 3.12: tools/find-python finds one (or says how to get one);
+# `make test PY=/path/to/python3.12` names it.
+PY ?= $(shell sh tools/find-python 2>/dev/null)
 VENV := .venv
+PLUGIN := plugins/lerobot_env_colorsort
 STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export HF_HUB_OFFLINE := 1
@@ -10,10 +13,14 @@ export HF_HUB_OFFLINE := 1
 
 install: $(STAMP)
 
-$(STAMP): setup.py overrides.txt
+$(STAMP): setup.py overrides.txt $(PLUGIN)/pyproject.toml
+	@test -n "$(PY)" || sh tools/find-python
+	@# a .venv from an older Python (3.11, before LeRobot 0.6) is rebuilt
+	$(VENV)/bin/python -c 'import sys; sys.exit(sys.version_info < (3, 12))' 2>/dev/null || rm -rf $(VENV)
 	test -x $(VENV)/bin/python || $(PY) -m venv $(VENV)
 	$(VENV)/bin/python -m pip install --quiet --upgrade pip uv
-	$(VENV)/bin/uv pip install --python $(VENV)/bin/python -e ".[dev]" --override overrides.txt
+	$(VENV)/bin/uv pip install --python $(VENV)/bin/python --compile-bytecode -e ".[dev]" -e $(PLUGIN) \
+		--override overrides.txt
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -37,6 +44,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_sort.py --preset default --seeds 10 --boxes 20
 	$(VENV)/bin/python demos/bench_sort.py --preset seed --seeds 3 --boxes 4
 	$(VENV)/bin/python demos/bench_collect.py --episodes 48
+	$(VENV)/bin/python demos/bench_eval.py
 	$(VENV)/bin/python demos/bench_suite.py --episodes 10
 
 clean:

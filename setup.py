@@ -12,8 +12,11 @@ INSTALL_REQUIRES = [
     "mujoco==3.9.0",
     "mink>=1.2,<1.3",
     "numpy>=2,<3",
-    "opencv-python-headless>=4.11,<4.13",
-    "lerobot==0.4.4",
+    "opencv-python-headless>=4.11,<4.14",
+    "lerobot[dataset,training,evaluation]>=0.6.1,<0.7",
+    "gymnasium>=1.0",
+    # robosuite.wrappers imports h5py (DataCollectionWrapper) for every wrapper:
+    "h5py>=3.10",
     "ruckig>=0.19,<0.20",
     "tqdm>=4.66",
     "av>=15,<16",
@@ -40,7 +43,7 @@ setup(
     if Path(__file__).with_name("README.md").exists()
     else "",
     long_description_content_type="text/markdown",
-    python_requires=">=3.10,<3.12",
+    python_requires=">=3.12",
     # The top-level assets/ folder ships inside the wheel as the package colorsort.assets.
     packages=find_packages(include=["colorsort", "colorsort.*"]) + ["colorsort.assets"],
     package_dir={"colorsort.assets": "assets"},

@@ -41,6 +41,7 @@ import numpy as np
 from tqdm import tqdm
 
 from colorsort.config import PRESETS, ROBOTS, make_config, sorting_time_limit
+from colorsort.logs import quiet_robosuite_info
 
 os.environ.setdefault("SVT_LOG", "1")  # the AV1 encoder's banner and info lines: errors only
 os.environ.setdefault("HF_DATASETS_DISABLE_PROGRESS_BARS", "1")  # one bar per episode saved, otherwise
@@ -176,6 +177,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     returns with ``interrupted`` set; any other error is returned in ``error``.
     """
     import av
+    from lerobot.configs.video import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     from colorsort.dataset import features, frame, task_text
@@ -191,7 +193,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     expert = SortingExpert(env)
     dataset = LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
-        robot_type=config.robot, use_videos=True, vcodec=config.vcodec, streaming_encoding=True,
+        robot_type=config.robot, use_videos=True, rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec), streaming_encoding=True,
         encoder_queue_maxsize=10_000, encoder_threads=1 if config.workers > 1 else None,
     )
     sec["setup"] += time.perf_counter() - t0
@@ -240,7 +242,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     except Exception:  # noqa: BLE001 - reported to the caller, finished episodes are still saved
         out.error = traceback.format_exc()
     finally:
-        if dataset.episode_buffer is not None and dataset.episode_buffer.get("size", 0) > 0:
+        if dataset.has_pending_frames():
             dataset.clear_episode_buffer()  # the episode under way is not saved
         dataset.finalize()
         env.close()
@@ -250,6 +252,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
 def _worker(config: CollectConfig, indices: list[int], root: str, messages, stop_event) -> None:
     """A recording process: Ctrl-C goes to the parent, which asks it to stop through ``stop_event``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    quiet_robosuite_info()
     try:
         shard = record_shard(config, indices, Path(root), lambda r: messages.put(("episode", r)), stop_event.is_set)
     except BaseException:  # noqa: BLE001 - e.g. the env could not be built
@@ -500,6 +503,7 @@ def print_summary(config: CollectConfig, s: CollectSummary) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    quiet_robosuite_info()
     config = parse_args(argv)
     try:
         summary = collect(config, progress=True, log=tqdm.write)

@@ -48,20 +48,33 @@ def joint_names(env: ColorSort) -> list[str]:
     return [j.removeprefix(prefix) for j in env.robots[0].robot_joints]
 
 
-def state_names(env: ColorSort) -> list[str]:
-    joints = joint_names(env)
+def _state_names(joints: list[str]) -> list[str]:
     return ([f"{j}.pos" for j in joints] + [f"{j}.vel" for j in joints]
             + ["cup.x", "cup.y", "cup.z", "cup.qx", "cup.qy", "cup.qz", "cup.qw",
                "suction.on", "suction.sealed", "ray.blocked", "belt.running"])
 
 
+def state_names(env: ColorSort) -> list[str]:
+    """The names of ``observation.state``'s elements."""
+    return _state_names(joint_names(env))
+
+
+def state_size(n_joints: int) -> int:
+    """Length of ``observation.state`` for an arm with ``n_joints`` joints."""
+    return len(_state_names([f"joint{k}" for k in range(n_joints)]))
+
+
 def env_state_names() -> list[str]:
+    """The names of ``observation.environment_state``'s elements."""
     return ([f"box.is_{c}" for c in COLORS] + ["box.x", "box.y", "box.z", "box.qw", "box.qx", "box.qy", "box.qz",
                                                "box.present"])
 
 
+ENV_STATE_SIZE = len(env_state_names())  # = len(ColorSort.next_box_state())
+
+
 def action_names(env: ColorSort) -> list[str]:
-    return [f"{j}.target" for j in joint_names(env)] + ["suction", "belt_pass"]
+    return env.action_names()
 
 
 def features(env: ColorSort, cameras: tuple[str, ...], image_size: tuple[int, int]) -> dict[str, dict]:
@@ -93,14 +106,7 @@ def robot_state(env: ColorSort, obs: dict[str, Any]) -> np.ndarray:
 
 def box_state(env: ColorSort) -> np.ndarray:
     """``observation.environment_state``: the in-play box with the lowest serial, or zeros."""
-    boxes = env.boxes_in_play()
-    out = np.zeros(len(COLORS) + 8, np.float32)
-    if boxes:
-        box = min(boxes, key=lambda b: b.serial)
-        out[list(COLORS).index(box.color)] = 1.0
-        out[len(COLORS) : len(COLORS) + 7] = env.box_pose(box)
-        out[-1] = 1.0
-    return out
+    return env.next_box_state()
 
 
 def frame(env: ColorSort, obs: dict[str, Any], action: np.ndarray, cameras: tuple[str, ...], task: str) -> dict[str, Any]:

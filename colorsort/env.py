@@ -6,6 +6,10 @@ Action (8,) for the IRB 140: absolute joint position targets for the arm's six j
     suction in [-1, 1] (> 0 is on), then belt pass in [-1, 1] (> 0 runs the belt even while
     the ray sensor sees a box: how a box with no bin is let through). Other
     ``controller_configs`` change the arm part as in robosuite; Panda has 7 joints, so 9.
+    NaN or infinite elements raise ``ValueError`` (naming them) before anything moves. Finite
+    values outside ``action_spec`` are clipped by robosuite's controller to its input range
+    ([-7, 7] rad); a target beyond a joint's limit drives the joint to its limit and no further.
+    Suction and belt pass act on their sign only: any positive value is on.
 Observations: robosuite proprioception (``robot0_joint_pos``, ``robot0_eef_pos``, ...);
     ``box_detected``, ``belt_running`` and ``suction_sealed`` (the cup's vacuum switch) as 1.0
     or 0.0; with ``use_camera_obs`` the images
@@ -19,7 +23,9 @@ Events: ``env.events`` lists every box that left play (``BoxEvent``: time, seria
     outcome, bin), for harnesses that score per box.
 Bins: a box resting inside a bin's walls is placed; at ``bin_capacity`` boxes the bin is
     emptied (its boxes go back to the pool) and logged.
-Reward: +1 per box placed in the bin of its colour, -1 per box misplaced or dropped.
+Reward: +1 per box placed in the bin of its colour, -1 per box misplaced or dropped, times
+    ``reward_scale``; ``reward_shaping=True`` adds a dense staged reward (reach the box, seal
+    it, carry it toward its bin, hold or drop it over the bin: see ``staged_rewards``).
 Success: ``boxes_to_sort`` boxes placed correctly, none misplaced or dropped.
 Termination: success, failure (a box misplaced or dropped), or ``time_limit`` (the horizon).
 Randomisation: only through ``seed`` (the env's own ``numpy.random.Generator``).
@@ -30,10 +36,12 @@ State: ``get_sim_state()`` returns everything that makes an instant replayable (
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 from dataclasses import dataclass, field
 from enum import Enum
+from pathlib import Path
 from typing import Any
 
 import mujoco
@@ -82,6 +90,23 @@ def rng_from_words(words: np.ndarray) -> np.random.Generator:
     gen.bit_generator.state = {"bit_generator": "PCG64", "state": {"state": state, "inc": inc},
                                "has_uint32": w[8], "uinteger": w[9]}
     return gen
+
+
+def action_bounds(robot: str) -> tuple[np.ndarray, np.ndarray]:
+    """``ColorSort(robots=robot).action_spec`` with the default controller, without building the env.
+
+    Joint targets [rad] within the controller's input range, then suction and belt pass in [-1, 1].
+    robosuite's controller clips joint targets to that range; the joints' own limits stop the arm
+    short of a target beyond them.
+    """
+    if robot not in ROBOTS:
+        raise ValueError(f"Unknown robot {robot!r}. Valid robots: {list(ROBOTS)}")
+    arm = json.loads(Path(asset_path("controllers", "joint_position_absolute.json")).read_text())
+    arm = arm["body_parts"]["arms"]["right"]
+    n = len(ROBOT_HOMES[robot])
+    low = np.concatenate([np.full(n, arm["input_min"], float), [-1.0, -1.0]])
+    high = np.concatenate([np.full(n, arm["input_max"], float), [1.0, 1.0]])
+    return low, high
 
 
 class BoxStatus(Enum):
@@ -136,6 +161,10 @@ class ColorSort(ManipulationEnv):
         control_freq: policy rate [Hz].
         servo_freq: rate [Hz] at which the arm controller recomputes joint torques, held in
             between (a drive's servo period); a divisor of the 500 Hz physics rate.
+        use_object_obs: add the ``next_box`` observation (``next_box_state``), part of robosuite's
+            ``object-state`` (what ``GymWrapper`` feeds a policy by default).
+        reward_scale: multiplies every reward (None: unscaled), as in robosuite's tasks.
+        reward_shaping: add the dense staged reward (``staged_rewards``) to the sparse one.
         **overrides: ``TaskConfig`` fields, e.g. ``belt_speed=0.1``.
         Other arguments are robosuite's.
     """
@@ -151,6 +180,7 @@ class ColorSort(ManipulationEnv):
         gripper_types: str = "SuctionGripper",
         initialization_noise: dict | None = None,
         use_camera_obs: bool = False,
+        use_object_obs: bool = True,
         has_renderer: bool = False,
         has_offscreen_renderer: bool = True,
         render_camera: str = "scene",
@@ -171,6 +201,8 @@ class ColorSort(ManipulationEnv):
         renderer: str = "mjviewer",
         renderer_config: dict | None = None,
         seed: int | None = None,
+        reward_scale: float | None = 1.0,
+        reward_shaping: bool = False,
         **overrides: Any,
     ):
         robot_list = [robots] if isinstance(robots, str) else list(robots)
@@ -217,6 +249,9 @@ class ColorSort(ManipulationEnv):
         self._arm_action = np.zeros(0)
         self._next_spawn_time = 0.0
         self._step_reward = 0.0
+        self.reward_scale = reward_scale
+        self.use_object_obs = bool(use_object_obs)
+        self.reward_shaping = bool(reward_shaping)
         self.render_seconds = 0.0  # [s] wall time spent rendering camera observations, for benchmarks
 
         super().__init__(
@@ -247,6 +282,9 @@ class ColorSort(ManipulationEnv):
             renderer_config=renderer_config,
             seed=seed,
         )
+        # robosuite hides its visualisation sites (the gripper's green grip line) in reset(), not when
+        # it builds the env: an env rendered before its first reset (a replay) would show them.
+        self.visualize(vis_settings={vis: False for vis in self._visualizations})
 
     # ------------------------------------------------------------------ model
     def _load_model(self) -> None:
@@ -365,7 +403,15 @@ class ColorSort(ManipulationEnv):
         def suction_sealed(obs_cache):
             return np.array([float(self.seal.held is not None)])
 
-        for s in (box_detected, belt_running, suction_sealed):
+        sensors = [box_detected, belt_running, suction_sealed]
+        if self.use_object_obs:
+
+            @sensor(modality="object")
+            def next_box(obs_cache):
+                return self.next_box_state()
+
+            sensors.append(next_box)
+        for s in sensors:
             observables[s.__name__] = Observable(name=s.__name__, sensor=s, sampling_rate=self.control_freq)
         return observables
 
@@ -396,6 +442,26 @@ class ColorSort(ManipulationEnv):
         self._spawn_if_due()
         self.sim.forward()
 
+    # ------------------------------------------------------------------ public handles
+    @property
+    def mj_model(self) -> mujoco.MjModel:
+        """The compiled MuJoCo model (robosuite's ``sim.model`` wraps it)."""
+        return self.sim.model._model
+
+    @property
+    def mj_data(self) -> mujoco.MjData:
+        """The MuJoCo data (robosuite's ``sim.data`` wraps it)."""
+        return self._data
+
+    def observe(self) -> dict[str, Any]:
+        """Sample every observation now (re-rendering the cameras), e.g. after lights changed."""
+        return self._get_observations(force_update=True)
+
+    def action_names(self) -> list[str]:
+        """One name per action element: the arm joints' targets, then ``suction``, ``belt_pass``."""
+        prefix = self.robots[0].robot_model.naming_prefix
+        return [f"{j.removeprefix(prefix)}.target" for j in self.robots[0].robot_joints] + ["suction", "belt_pass"]
+
     # ------------------------------------------------------------------ physics step
     @property
     def action_dim(self) -> int:
@@ -412,6 +478,11 @@ class ColorSort(ManipulationEnv):
             action = np.asarray(action, dtype=float)
             if action.shape != (self.action_dim,):
                 raise ValueError(f"Expected an action of shape ({self.action_dim},), got {action.shape}")
+            bad = np.flatnonzero(~np.isfinite(action))
+            if bad.size:
+                names = self.action_names()
+                raise ValueError("Action elements must be finite; got "
+                                 + ", ".join(f"{names[i]} (index {i}) = {action[i]}" for i in bad))
             self._substep = 0
             self._arm_action = action[:-1]
             self.belt_pass = bool(action[-1] > 0.0)
@@ -465,8 +536,45 @@ class ColorSort(ManipulationEnv):
         return reward, done, info
 
     def reward(self, action=None) -> float:
-        """Sparse: +1 per box placed in its colour's bin this step, -1 per box misplaced or dropped."""
-        return self._step_reward
+        """This step's reward, times ``reward_scale``.
+
+        Sparse (the default): +1 per box placed in its colour's bin this step, -1 per box
+        misplaced or dropped. With ``reward_shaping``, plus every step
+        ``(boxes placed correctly so far + staged_rewards()["progress"]) / boxes_to_sort``:
+        in [0, 1] until ``boxes_to_sort`` boxes are placed, rising through the stages of the
+        box being sorted, and never falling when a box is placed (its share moves to the count).
+        """
+        reward = self._step_reward
+        if self.reward_shaping:
+            reward += (sum(self.tally.placed.values()) + self.staged_rewards()["progress"]) / self.config.boxes_to_sort
+        return reward * self.reward_scale if self.reward_scale is not None else reward
+
+    def staged_rewards(self) -> dict[str, float]:
+        """Dense progress on the next box that has a bin (lowest serial in play), by stage.
+
+        ``reach`` in [0, 0.25]: 0.25 (1 - tanh(10 d)), d [m] from the cup pad to the box's top face;
+        ``seal``: 0.5 while the cup holds the box; ``carry`` in [0.5, 0.75] while it holds it:
+        0.5 + 0.25 (1 - tanh(5 e)), e [m] the box's horizontal distance to its bin's centre;
+        ``place``: 1 while the box, held or falling, is over the inside of its own bin.
+        ``progress`` is the largest; all are 0 when no box with a bin is in play. Boxes with no
+        bin (let through on the belt) earn nothing here.
+        """
+        stages = {"reach": 0.0, "seal": 0.0, "carry": 0.0, "place": 0.0}
+        targets = [b for b in self.boxes_in_play() if b.color in BIN_COLORS]
+        if targets:
+            box = min(targets, key=lambda b: b.serial)
+            L = self.layout
+            x, y, z = self.box_pos(box)
+            pad = self.sim.data.geom_xpos[self.seal.pad]
+            stages["reach"] = 0.25 * (1 - np.tanh(10 * np.linalg.norm(pad - (x, y, z + L.box_size / 2))))
+            held = self.seal.held == box.index
+            if held:
+                bx, by = L.bin_center(BIN_COLORS.index(box.color))
+                stages["seal"] = 0.5
+                stages["carry"] = 0.5 + 0.25 * (1 - np.tanh(5 * np.hypot(x - bx, y - by)))
+            if self._bin_under(x, y) == box.color:
+                stages["place"] = 1.0
+        return {**{k: float(v) for k, v in stages.items()}, "progress": float(max(stages.values()))}
 
     def _check_success(self) -> bool:
         t = self.tally
@@ -560,6 +668,18 @@ class ColorSort(ManipulationEnv):
             controller.update(force=True)  # robosuite caches joint states and the mass matrix between steps
 
     # ------------------------------------------------------------------ boxes
+    def next_box_state(self) -> np.ndarray:
+        """The in-play box with the lowest serial: colour one-hot over ``config.COLORS``, pose (7,)
+        (centre [m], quaternion w, x, y, z), then 1.0; zeros when no box is in play. Shape (len(COLORS) + 8,)."""
+        boxes = self.boxes_in_play()
+        out = np.zeros(len(COLORS) + 8, np.float32)
+        if boxes:
+            box = min(boxes, key=lambda b: b.serial)
+            out[list(COLORS).index(box.color)] = 1.0
+            out[len(COLORS) : len(COLORS) + 7] = self.box_pose(box)
+            out[-1] = 1.0
+        return out
+
     def box_pos(self, box: Box) -> np.ndarray:
         """World position of a box's centre [m]."""
         return self.sim.data.body_xpos[self._box_body[box.index]].copy()

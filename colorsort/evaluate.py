@@ -2,12 +2,12 @@
 
 Example::
 
-    colorsort-eval --policy expert --variant default --episodes 50 --json outputs/eval.json
+    colorsort-eval --policy expert --variant default --episodes 50 --envs 2 --json outputs/eval.json
     colorsort-eval --policy outputs/train/act/checkpoints/last/pretrained_model --variant jitter --episodes 20
     colorsort-eval --list
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` + k), so the same
-command gives the same numbers. Metrics: success rate (every box of the episode where it belongs,
+command gives the same numbers, whatever ``--envs`` (episodes run at once, one process each). Metrics: success rate (every box of the episode where it belongs,
 none misplaced or dropped) with a 95% Wilson interval; boxes placed correctly, misplaced, dropped;
 distractors (boxes with no bin) let through; boxes per minute (boxes handled right, placed in
 their bin or let through, per minute of sim time); mean cycle time (sim time between consecutive
@@ -20,13 +20,17 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import multiprocessing
 import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
+from colorsort.logs import quiet_robosuite_info
+from colorsort.policies import check_policy_spec
 from colorsort.variants import VARIANTS, Variant, get_variant
 
 
@@ -69,40 +73,114 @@ def episode_seeds(variant: Variant, episodes: int, seed: int | None) -> list[int
     return list(variant.seeds[:episodes])
 
 
+@dataclass(frozen=True)
+class EvalSettings:
+    """What every evaluation episode shares; each worker process builds its env and policy from it."""
+
+    policy: str
+    variant: str
+    image_size: tuple[int, int] = (128, 128)  # (height, width) [px]
+    cameras: tuple[str, ...] = ("scene", "wrist")
+    episode_length: int | None = None  # steps before truncation; None: the variant's time limit
+
+
+class _Runner:
+    """One env and one policy, built once per process, running episodes by seed."""
+
+    def __init__(self, settings: EvalSettings):
+        from colorsort.gym_env import ColorSortGymEnv
+        from colorsort.policies import make_policy
+
+        self.policy = make_policy(settings.policy)
+        self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
+                                   image_size=settings.image_size, episode_length=settings.episode_length,
+                                   render_mode=None)
+
+    def episode(self, seed: int) -> dict:
+        obs, info = self.env.reset(seed=seed)
+        self.policy.reset(self.env, seed)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            obs, _, terminated, truncated, info = self.env.step(self.policy.act(obs))
+        return {"seed": seed, "success": bool(info["is_success"]), "steps": self.env.steps,
+                **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through", "distractors", "sim_time",
+                                        "sorted_times")}}
+
+
+_runner: _Runner | None = None  # the worker process's own, built by _init_worker
+
+
+def _init_worker(settings: EvalSettings) -> None:
+    global _runner
+    quiet_robosuite_info()
+    _runner = _Runner(settings)
+
+
+def _run_episode(seed: int) -> dict:
+    return _runner.episode(seed)
+
+
+def run_episodes(settings: EvalSettings, seeds: list[int], envs: int = 1, progress: bool = True) -> list[dict]:
+    """Run one episode per seed, on ``envs`` worker processes (each with its own env and policy).
+
+    Episodes are independent (each starts from its seed), so the results, returned in seed order,
+    are the same whatever ``envs``. Workers start with the ``forkserver`` context: no GL context
+    or policy state crosses a fork.
+    """
+    bar = tqdm(total=len(seeds), desc=f"{settings.policy} on {settings.variant}", unit="episode",
+               disable=not progress)
+    try:
+        if envs == 1:
+            runner = _Runner(settings)
+            results = []
+            try:
+                for s in seeds:
+                    results.append(runner.episode(s))
+                    bar.update()
+            finally:
+                runner.env.close()
+            return results
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(["colorsort.evaluate"])  # workers fork from a server that imported it once
+        with ProcessPoolExecutor(max_workers=envs, mp_context=context, initializer=_init_worker,
+                                 initargs=(settings,)) as pool:
+            futures = [pool.submit(_run_episode, s) for s in seeds]
+            for _ in as_completed(futures):
+                bar.update()
+            return [f.result() for f in futures]
+    finally:
+        bar.close()
+
+
 def evaluate(policy_spec: str, variant_name: str, episodes: int, seed: int | None = None,
              image_size: tuple[int, int] = (128, 128), cameras: tuple[str, ...] = ("scene", "wrist"),
-             progress: bool = True, max_episode_steps: int | None = None) -> EvalReport:
-    """Run ``episodes`` episodes of a policy on a variant and aggregate the metrics."""
-    from colorsort.gym_env import ColorSortGymEnv
-    from colorsort.policies import make_policy
-
+             progress: bool = True, episode_length: int | None = None, envs: int = 1) -> EvalReport:
+    """Run ``episodes`` episodes of a policy on a variant (on ``envs`` processes) and aggregate the metrics."""
+    if envs < 1:
+        raise ValueError(f"envs={envs}: give at least 1")
     variant = get_variant(variant_name)
+    check_policy_spec(policy_spec)
     seeds = episode_seeds(variant, episodes, seed)
-    policy = make_policy(policy_spec)
-    env = ColorSortGymEnv(variant, cameras=cameras, image_size=image_size, max_episode_steps=max_episode_steps)
-    report = EvalReport(policy=policy.name, variant=variant.name, seeds=seeds)
+    settings = EvalSettings(policy_spec, variant.name, tuple(image_size), tuple(cameras), episode_length)
+    results = run_episodes(settings, seeds, min(envs, len(seeds)), progress)
+    return aggregate(str(policy_spec), variant.name, results)
+
+
+def aggregate(policy: str, variant: str, results: list[dict]) -> EvalReport:
+    """The report over per-episode results (``_Runner.episode``'s dicts, in seed order)."""
+    report = EvalReport(policy=policy, variant=variant, seeds=[r["seed"] for r in results])
     cycles: list[float] = []
     handled = 0
-    try:
-        for s in tqdm(seeds, desc=f"{policy.name} on {variant.name}", unit="episode", disable=not progress):
-            obs, info = env.reset(seed=s)
-            policy.reset(env, s)
-            terminated = truncated = False
-            while not (terminated or truncated):
-                obs, _, terminated, truncated, info = env.step(policy.act(obs))
-            report.episodes += 1
-            report.successes += int(info["is_success"])
-            for key in ("correct", "misplaced", "dropped", "distractors"):
-                setattr(report, key, getattr(report, key) + info[key])
-            report.distractors_let_through += info["let_through"]
-            report.sim_time_s += info["sim_time"]
-            handled += len(info["sorted_times"])
-            cycles += list(np.diff(info["sorted_times"]))
-            report.per_episode.append({"seed": s, "success": bool(info["is_success"]), "steps": env.steps,
-                                       **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through",
-                                                               "distractors", "sim_time")}})
-    finally:
-        env.close()
+    for r in results:
+        report.episodes += 1
+        report.successes += int(r["success"])
+        for key in ("correct", "misplaced", "dropped", "distractors"):
+            setattr(report, key, getattr(report, key) + r[key])
+        report.distractors_let_through += r["let_through"]
+        report.sim_time_s += r["sim_time"]
+        handled += len(r["sorted_times"])
+        cycles += list(np.diff(r["sorted_times"]))
+        report.per_episode.append({k: v for k, v in r.items() if k != "sorted_times"})
     report.success_rate = report.successes / report.episodes
     report.success_ci95 = wilson_interval(report.successes, report.episodes)
     report.boxes_per_minute = 60.0 * handled / report.sim_time_s if report.sim_time_s > 0 else 0.0
@@ -125,6 +203,7 @@ def format_report(r: EvalReport) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    quiet_robosuite_info()
     parser = argparse.ArgumentParser(prog="colorsort-eval", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--policy", default="expert", help="expert, random, or a LeRobot checkpoint folder")
@@ -133,6 +212,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's seeds)")
     parser.add_argument("--image-size", type=int, default=128, help="square camera images [px], as trained")
     parser.add_argument("--cameras", default="scene,wrist", help="comma-separated cameras, as trained")
+    parser.add_argument("--envs", type=int, default=1,
+                        help="episodes run at once, each in its own process (same numbers whatever N)")
     parser.add_argument("--json", default=None, help="write the metrics as JSON here")
     parser.add_argument("--list", action="store_true", help="print the variants, one per line, and exit")
     args = parser.parse_args(argv)
@@ -142,10 +223,12 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.episodes < 1:
         parser.error(f"--episodes {args.episodes}: give at least 1")
+    if args.envs < 1:
+        parser.error(f"--envs {args.envs}: give at least 1")
     try:
         get_variant(args.variant)
         report = evaluate(args.policy, args.variant, args.episodes, args.seed, (args.image_size, args.image_size),
-                          tuple(c for c in args.cameras.split(",") if c))
+                          tuple(c for c in args.cameras.split(",") if c), envs=args.envs)
     except ValueError as err:
         print(f"colorsort-eval: error: {err}", file=sys.stderr)
         return 2

@@ -23,9 +23,9 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from colorsort.config import COLORS
-from colorsort.dataset import box_state, robot_state, state_names
-from colorsort.env import ColorSort
+from colorsort.config import ROBOT_HOMES
+from colorsort.dataset import ENV_STATE_SIZE, box_state, robot_state, state_size
+from colorsort.env import CAMERAS, ColorSort, action_bounds
 from colorsort.lighting import LightRig
 from colorsort.variants import Variant, get_variant, is_distractor
 
@@ -33,62 +33,97 @@ from colorsort.variants import Variant, get_variant, is_distractor
 class ColorSortGymEnv(gym.Env):
     """One variant of the task, as a Gymnasium env.
 
+    The robosuite env (and with it MuJoCo's GL context) is built on the first ``reset``,
+    ``step`` or ``render``, in the process that uses it: a vector env's parent process builds
+    this object only to read its spaces, and never renders before it forks its workers.
+
     Args:
         variant: a name from ``colorsort.variants.VARIANTS``, or a ``Variant``.
         cameras: the cameras in ``obs["pixels"]``, any of "scene", "sensor", "wrist".
         image_size: (height, width) of every camera [px].
         fps: control rate [Hz].
         render_mode: "rgb_array" (the scene camera at ``image_size``) or None.
-        max_episode_steps: truncate after this many steps; default: the variant's time limit.
+        episode_length: truncate after this many steps; default: the variant's time limit.
+            (``gym.make(..., max_episode_steps=N)`` adds Gymnasium's own ``TimeLimit`` on top.)
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, variant: str | Variant = "default", cameras: tuple[str, ...] = ("scene", "wrist"),
                  image_size: tuple[int, int] = (128, 128), fps: int = 20, render_mode: str | None = "rgb_array",
-                 max_episode_steps: int | None = None):
+                 episode_length: int | None = None):
         self.variant = get_variant(variant) if isinstance(variant, str) else variant
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}; valid modes: [None, 'rgb_array']")
+        unknown = [c for c in cameras if c not in CAMERAS]
+        if unknown:
+            raise ValueError(f"Unknown camera(s) {unknown}. Valid cameras: {list(CAMERAS)}")
+        if episode_length is not None and episode_length < 1:
+            raise ValueError(f"episode_length={episode_length}: give at least 1 step, or None for the variant's limit")
         self.render_mode = render_mode
         self.cameras = tuple(cameras)
         self.image_size = tuple(image_size)
+        self.fps = fps
         h, w = self.image_size
-        self.env = ColorSort(robots=self.variant.robot, config=self.variant.task_config, use_camera_obs=True,
-                             camera_names=list(self.cameras), camera_heights=h, camera_widths=w,
-                             control_freq=fps, ignore_done=True)
-        self.lights = LightRig(self.env.sim.model._model)
-        self.max_episode_steps = max_episode_steps or int(np.ceil(self.variant.time_limit * fps))
+        # LeRobot's evaluator reads ``_max_episode_steps`` (Gymnasium's TimeLimit attribute) through env.call.
+        self._max_episode_steps = episode_length or int(np.ceil(self.variant.time_limit * fps))
         self.metadata = {**self.metadata, "render_fps": fps}
-        n_state = len(state_names(self.env))
+        n_joints = len(ROBOT_HOMES[self.variant.robot])
         self.observation_space = spaces.Dict({
             "pixels": spaces.Dict({c: spaces.Box(0, 255, (h, w, 3), np.uint8) for c in self.cameras}),
-            "agent_pos": spaces.Box(-np.inf, np.inf, (n_state,), np.float32),
-            "environment_state": spaces.Box(-np.inf, np.inf, (len(COLORS) + 8,), np.float32),
+            "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(n_joints),), np.float32),
+            "environment_state": spaces.Box(-np.inf, np.inf, (ENV_STATE_SIZE,), np.float32),
         })
-        low, high = self.env.action_spec
+        low, high = action_bounds(self.variant.robot)
         self.action_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+        # What LeRobot's evaluator reads from every env (env.call): the task's name and its instruction
+        # for language-conditioned policies.
+        self.task = self.variant.name
+        self.task_description = (f"Sort the next {self.variant.boxes} boxes from the conveyor into the bins "
+                                 "of their colours.")
+        self._env: ColorSort | None = None
+        self.lights: LightRig | None = None
         self.raw_obs: dict[str, Any] = {}  # the robosuite observation behind the last one returned
         self.steps = 0
+
+    @property
+    def max_episode_steps(self) -> int:
+        """Steps after which an episode is truncated."""
+        return self._max_episode_steps
+
+    @property
+    def env(self) -> ColorSort:
+        """The robosuite task underneath, built on first use."""
+        if self._env is None:
+            h, w = self.image_size
+            self._env = ColorSort(robots=self.variant.robot, config=self.variant.task_config,
+                                  use_camera_obs=bool(self.cameras),
+                                  has_offscreen_renderer=bool(self.cameras) or self.render_mode is not None,
+                                  camera_names=list(self.cameras) or "scene", camera_heights=h, camera_widths=w,
+                                  control_freq=self.fps, ignore_done=True)
+            self.lights = LightRig(self._env.mj_model)
+        return self._env
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         episode_seed = int(self.np_random.integers(2**31)) if seed is None else int(seed)
-        self.raw_obs = self.env.reset(seed=episode_seed)
-        self.lights.apply(self.variant.lighting(self.env.rng))  # lights only: box and bin colours stay
-        if self.variant.random_lights:
-            self.raw_obs = self.env._get_observations(force_update=True)  # re-render under the new lights
+        env = self.env
+        self.raw_obs = env.reset(seed=episode_seed)
+        self.lights.apply(self.variant.lighting(env.rng))  # lights only: box and bin colours stay
+        if self.variant.random_lights and self.cameras:
+            self.raw_obs = env.observe()  # re-render under the new lights
         self.steps = 0
         return self._observation(), self._info()
 
     def step(self, action: np.ndarray):
-        action = np.asarray(action, dtype=np.float32)
-        self.raw_obs, reward, _, _ = self.env.step(action)
+        if self._env is None:
+            raise gym.error.ResetNeeded("Call reset() before step()")
+        self.raw_obs, reward, _, _ = self.env.step(np.asarray(action, dtype=np.float32))
         self.steps += 1
         info = self._info()
         terminated = info["is_success"] or info["failed"]
-        truncated = not terminated and self.steps >= self.max_episode_steps
+        truncated = not terminated and self.steps >= self._max_episode_steps
         return self._observation(), float(reward), bool(terminated), bool(truncated), info
 
     def render(self) -> np.ndarray | None:
@@ -100,11 +135,9 @@ class ColorSortGymEnv(gym.Env):
         return self.env.camera_image("scene", w, h)
 
     def close(self) -> None:
-        self.env.close()
-
-    def task_description(self) -> str:
-        """The instruction for LeRobot's language-conditioned policies."""
-        return f"Sort the next {self.variant.boxes} boxes from the conveyor into the bins of their colours."
+        if self._env is not None:
+            self._env.close()
+            self._env = None
 
     # ------------------------------------------------------------------ helpers
     def _observation(self) -> dict[str, Any]:

@@ -1,14 +1,16 @@
 """LeRobot's ``EnvConfig`` for ColorSort, so that LeRobot's own tools evaluate policies on it.
 
-``lerobot-eval`` finds it through LeRobot's plugin mechanism::
+LeRobot 0.6 finds it by itself: ``make install`` (or ``pip install plugins/lerobot_env_colorsort``)
+installs the plugin distribution ``lerobot_env_colorsort``, which LeRobot's CLIs import at start
+(``register_third_party_plugins``). ``--env.discover_packages_path=colorsort`` works too::
 
-    lerobot-eval --env.discover_packages_path=colorsort --env.type=colorsort \\
-        --env.task=ColorSort-Jitter-v0 --policy.path=outputs/train/act/checkpoints/last/pretrained_model \\
-        --eval.n_episodes=10 --eval.batch_size=1 --policy.device=cpu
+    lerobot-eval --env.type=colorsort --env.task=ColorSort-Jitter-v0 \\
+        --policy.path=outputs/train/act/checkpoints/last/pretrained_model --policy.device=cpu \\
+        --eval.n_episodes=10 --eval.batch_size=2
 
 ``--env.task`` is a Gymnasium id without the ``colorsort/`` namespace (``ColorSort-v0`` or a
 variant's, see ``colorsort-eval --list``); ``--env.cameras`` and ``--env.image_size`` must match
-the dataset the policy was trained on.
+the dataset the policy was trained on (``--env.cameras=`` for a state-only policy).
 """
 
 from __future__ import annotations
@@ -19,7 +21,21 @@ from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
-from colorsort.config import COLORS
+from colorsort.config import ROBOT_HOMES
+from colorsort.dataset import ENV_STATE_SIZE, state_size
+from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, Variant, get_variant
+
+NAMESPACE = "colorsort"
+
+
+def variant_of_task(task: str) -> Variant:
+    """The benchmark variant behind a Gymnasium id without its namespace, e.g. ``ColorSort-Jitter-v0``."""
+    ids = {DEFAULT_GYM_ID: "default", **{v.gym_id: name for name, v in VARIANTS.items()}}
+    gym_id = f"{NAMESPACE}/{task}"
+    if gym_id not in ids:
+        valid = sorted(i.removeprefix(f"{NAMESPACE}/") for i in ids)
+        raise ValueError(f"Unknown ColorSort task {task!r}. Valid tasks: {valid}")
+    return get_variant(ids[gym_id])
 
 
 @EnvConfig.register_subclass("colorsort")
@@ -28,20 +44,19 @@ class ColorSortEnv(EnvConfig):
     """ColorSort for LeRobot: ``task`` is the Gymnasium id without its namespace."""
 
     task: str | None = "ColorSort-v0"
-    fps: int = 20
-    cameras: str = "scene,wrist"  # comma-separated, as recorded by colorsort-collect --cameras
+    fps: int = 20  # control rate [Hz], as recorded
+    cameras: str = "scene,wrist"  # comma-separated, as recorded by colorsort-collect --cameras; "" for none
     image_size: int = 128  # square camera images [px]
-    robot_joints: int = 6  # 6 for the IRB 140 and UR5e, 7 for the Panda
     episode_length: int | None = None  # steps before truncation; default: the variant's time limit
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        n = self.robot_joints
+        n = len(ROBOT_HOMES[variant_of_task(self.task).robot])
         self.features = {
             ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(n + 2,)),
-            "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(2 * n + 11,)),
-            "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(len(COLORS) + 8,)),
+            "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(state_size(n),)),
+            "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(ENV_STATE_SIZE,)),
         }
         self.features_map = {ACTION: ACTION, "agent_pos": OBS_STATE, "environment_state": OBS_ENV_STATE}
         for cam in self.camera_list:
@@ -59,9 +74,9 @@ class ColorSortEnv(EnvConfig):
 
     @property
     def gym_id(self) -> str:
-        return f"colorsort/{self.task}"
+        return f"{NAMESPACE}/{self.task}"
 
     @property
     def gym_kwargs(self) -> dict:
         return {"cameras": self.camera_list, "image_size": (self.image_size, self.image_size), "fps": self.fps,
-                "max_episode_steps": self.episode_length}
+                "episode_length": self.episode_length}

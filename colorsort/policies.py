@@ -75,7 +75,7 @@ class LeRobotPolicy:
         import torch
 
         torch.manual_seed(seed)
-        self.task = env.task_description()
+        self.task = env.task_description
         self.policy.reset()
 
     def act(self, obs: dict[str, Any]) -> np.ndarray:
@@ -89,12 +89,22 @@ class LeRobotPolicy:
         return action.to("cpu").numpy()[0].astype(np.float32)
 
 
+def check_policy_spec(spec: str) -> None:
+    """ValueError unless ``spec`` is ``"expert"``, ``"random"`` or a LeRobot checkpoint folder (cheap: loads nothing)."""
+    if spec in ("expert", "random"):
+        return
+    if not Path(spec).exists():
+        raise ValueError(f"Unknown policy {spec!r}: give 'expert', 'random' or a LeRobot checkpoint folder")
+    if not (Path(spec) / "config.json").is_file():
+        raise ValueError(f"{spec} is not a LeRobot checkpoint (no config.json); expected e.g. "
+                         "outputs/train/<run>/checkpoints/last/pretrained_model")
+
+
 def make_policy(spec: str) -> Policy:
     """``"expert"``, ``"random"`` or the path of a LeRobot checkpoint."""
+    check_policy_spec(spec)
     if spec == "expert":
         return ExpertPolicy()
     if spec == "random":
         return RandomPolicy()
-    if Path(spec).exists():
-        return LeRobotPolicy(spec)
-    raise ValueError(f"Unknown policy {spec!r}: give 'expert', 'random' or a LeRobot checkpoint folder")
+    return LeRobotPolicy(spec)

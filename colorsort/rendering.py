@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 
 GL_HELP = (
     "MuJoCo could not create an OpenGL context for off-screen rendering (MUJOCO_GL={backend!r}): {error}\n"
@@ -10,6 +11,28 @@ GL_HELP = (
     "apt-get install libegl1 libgl1-mesa-dri) or MUJOCO_GL=osmesa (apt-get install libosmesa6). "
     "To run without images, pass has_offscreen_renderer=False and use_camera_obs=False."
 )
+
+
+FORK_HELP = (
+    "This process was forked from one that had already rendered with EGL (MUJOCO_GL=egl). "
+    "An EGL display does not survive fork(): rendering here would hang. Start worker processes "
+    "with the 'forkserver' or 'spawn' multiprocessing context (e.g. gym.make_vec(..., "
+    "vector_kwargs={'context': 'forkserver'})), or fork them before the parent renders anything."
+)
+_EGL_MODULES = ("mujoco.egl", "robosuite.renderers.context.egl_context")
+_egl_inherited = False  # set in a child forked from a process with an initialised EGL display
+
+
+def _egl_display_initialised() -> bool:
+    return any(getattr(sys.modules.get(name), "EGL_DISPLAY", None) is not None for name in _EGL_MODULES)
+
+
+def _note_fork() -> None:
+    global _egl_inherited
+    _egl_inherited = _egl_inherited or _egl_display_initialised()
+
+
+os.register_at_fork(after_in_child=_note_fork)
 
 
 def ensure_gl_backend() -> None:
@@ -34,7 +57,13 @@ def gl_error(error: BaseException) -> RuntimeError:
 
 
 def check_gl() -> None:
-    """Render one pixel with MuJoCo; raise ``RuntimeError`` with set-up advice if that fails."""
+    """Render one pixel with MuJoCo; raise ``RuntimeError`` with set-up advice if that fails.
+
+    Also raises ``RuntimeError`` (instead of hanging) in a process forked from one that had
+    already rendered with EGL.
+    """
+    if _egl_inherited:
+        raise RuntimeError(FORK_HELP)
     try:
         import mujoco
 

@@ -31,6 +31,7 @@ from tqdm import tqdm
 from colorsort.collect import MARKER, parse_image_size
 from colorsort.dataset import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
 from colorsort.env import CAMERAS, ColorSort
+from colorsort.logs import quiet_robosuite_info
 from colorsort.video import VideoWriter, contact_sheet, save_png
 
 warnings.filterwarnings("ignore", message="Cannot enable progress bars")  # datasets, when HF_DATASETS_DISABLE_PROGRESS_BARS is set
@@ -201,6 +202,7 @@ def replay(root: str | Path, index: int, camera: str = "scene", size: tuple[int,
 
 
 def main(argv: list[str] | None = None) -> int:
+    quiet_robosuite_info()
     parser = argparse.ArgumentParser(prog="colorsort-replay", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("dataset", help="dataset directory (colorsort-collect's --out)")

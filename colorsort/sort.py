@@ -27,6 +27,7 @@ from tqdm import tqdm
 from colorsort.config import BIN_COLORS, PRESETS, ROBOT_JOINT_SPEEDS, ROBOTS, make_config, sorting_time_limit
 from colorsort.env import ColorSort
 from colorsort.expert import SortingExpert
+from colorsort.logs import quiet_robosuite_info
 from colorsort.video import VideoWriter, contact_sheet, save_png
 
 SHEET_TILE_WIDTH = 320  # [px] frames kept for the contact sheet are shrunk to this width
@@ -195,6 +196,7 @@ def parse_args(argv: list[str] | None) -> SortConfig:
 
 
 def main(argv: list[str] | None = None) -> int:
+    quiet_robosuite_info()
     config = parse_args(argv)
     report = run_sort(config, progress=True, log=tqdm.write)
     print(f"{config.robot} on '{config.preset}', seed {config.seed}: {len(report.boxes)} boxes in "

@@ -1,0 +1,5 @@
+"""LeRobot plugin hook: importing this registers ColorSort's ``EnvConfig`` (``--env.type=colorsort``)."""
+
+from colorsort.lerobot_env import ColorSortEnv
+
+__all__ = ["ColorSortEnv"]

@@ -1,0 +1,174 @@
+"""LeRobot as its users run it: README's lerobot-train and lerobot-eval commands, verbatim, on ColorSort.
+
+The commands are read from README.md, so a test that passes means the documented command works.
+Only what README says may change is changed: the training length and batch (``--steps``,
+``--batch_size``), the evaluation's episode count and batch size (and ``use_async_envs`` for the
+synchronous runs). Everything else is LeRobot's defaults.
+"""
+
+import json
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from colorsort.evaluate import evaluate
+from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+BIN = Path(sys.executable).parent
+
+
+def readme_command(program: str) -> list[str]:
+    """The README's first shell command that runs ``program``, continuation lines joined, as argv."""
+    text = README.read_text().replace("\\\n", " ")
+    line = next(line for line in text.splitlines() if re.search(rf"(^|\s){program}\s", line))
+    argv = shlex.split(line)
+    env_assignments = [a for a in argv[: argv.index(program)] if "=" in a]
+    assert env_assignments == ["HF_HUB_OFFLINE=1"], f"README's {program} command sets {env_assignments}"
+    return argv[argv.index(program):]
+
+
+def replace_flag(argv: list[str], flag: str, value: str) -> list[str]:
+    assert any(a.startswith(f"{flag}=") for a in argv), f"README's command has no {flag}"
+    return [f"{flag}={value}" if a.startswith(f"{flag}=") else a for a in argv]
+
+
+def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProcess:
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    argv = [str(BIN / argv[0])] + argv[1:]
+    return subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def readme_checkpoint(tmp_path_factory):
+    """README's lerobot-train command, 2 steps, on a one-episode dataset recorded with colorsort-collect's defaults."""
+    from colorsort.collect import CollectConfig, collect
+
+    work = tmp_path_factory.mktemp("readme")
+    collect(CollectConfig(out=str(work / "datasets" / "colorsort"), episodes=1), progress=False, log=lambda _: None)
+    argv = replace_flag(replace_flag(readme_command("lerobot-train"), "--steps", "2"), "--batch_size", "2")
+    train = run(argv, work, timeout=600)
+    assert train.returncode == 0, train.stderr[-3000:]
+    assert (work / "outputs/train/act/checkpoints/last/pretrained_model/model.safetensors").is_file()
+    return work
+
+
+def newest_eval_info(work: Path) -> dict:
+    """The ``overall`` metrics of the last lerobot-eval run (outputs/eval/<date>/<time>_colorsort_<policy>/)."""
+    newest = max((work / "outputs" / "eval").rglob("eval_info.json"), key=lambda p: p.stat().st_mtime)
+    return json.loads(newest.read_text())["overall"]
+
+
+@pytest.mark.parametrize("batch_size,use_async,discover", [(1, None, False), (2, None, False), (2, "false", True)],
+                         ids=["batch1", "batch2-async", "batch2-sync-discover-flag"])
+def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint, batch_size, use_async, discover):
+    argv = replace_flag(readme_command("lerobot-eval"), "--eval.n_episodes", str(batch_size))
+    argv = replace_flag(argv, "--eval.batch_size", str(batch_size))
+    if use_async is not None:
+        argv.append(f"--eval.use_async_envs={use_async}")
+    if discover:
+        argv.insert(1, "--env.discover_packages_path=colorsort")  # the pre-0.6 way keeps working
+    done = run(argv, readme_checkpoint, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    summary = newest_eval_info(readme_checkpoint)
+    assert summary["n_episodes"] == batch_size and 0.0 <= summary["pc_success"] <= 100.0
+    videos = [readme_checkpoint / p for p in summary["video_paths"]]  # relative to the working directory
+    assert videos and all(p.stat().st_size > 1000 for p in videos)  # LeRobot renders episodes by default
+
+
+def test_colorsort_env_type_is_found_by_lerobots_plugin_discovery():
+    """LeRobot 0.6's CLIs import installed lerobot_env_* distributions: no --env.discover_packages_path."""
+    code = ("from lerobot.utils.import_utils import register_third_party_plugins\n"
+            "from lerobot.envs.configs import EnvConfig\n"
+            "assert 'colorsort' not in EnvConfig.get_known_choices()\n"
+            "register_third_party_plugins()\n"
+            "print(sorted(EnvConfig.get_known_choices()))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "HF_HUB_OFFLINE": "1"})
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "'colorsort'" in done.stdout
+
+
+@pytest.mark.parametrize("gym_id", [DEFAULT_GYM_ID] + [v.gym_id for v in VARIANTS.values()])
+def test_every_variant_builds_and_steps_through_lerobots_make_env(gym_id):
+    from lerobot.envs.factory import make_env
+    from lerobot.envs.utils import preprocess_observation
+
+    from colorsort.lerobot_env import ColorSortEnv
+
+    cfg = ColorSortEnv(task=gym_id.removeprefix("colorsort/"), image_size=32, episode_length=3)
+    envs = make_env(cfg, n_envs=1)["colorsort"][0]
+    obs, _ = envs.reset(seed=[0])
+    batch = preprocess_observation(obs)
+    for key, feature in cfg.features.items():
+        if key == "action":
+            continue
+        shape = tuple(batch[cfg.features_map[key]].shape[1:])
+        h, w, c = feature.shape if key.startswith("pixels/") else (None, None, None)
+        assert shape == ((c, h, w) if c else feature.shape), (key, shape)  # images arrive channel-first
+    assert envs.single_action_space.shape == cfg.features["action"].shape
+    for _ in range(3):
+        obs, _, terminated, truncated, info = envs.step(np.zeros((1, *cfg.features["action"].shape), np.float32))
+    assert truncated[0] and not terminated[0]
+    envs.close()
+
+
+def test_an_unknown_task_names_the_valid_ones():
+    from colorsort.lerobot_env import ColorSortEnv
+
+    with pytest.raises(ValueError, match="Valid tasks: .*ColorSort-Jitter-v0"):
+        ColorSortEnv(task="ColorSort-Hard-v0")
+
+
+def tiny_act(dataset_root, out_dir):
+    """A small randomly initialised ACT policy built from a recorded dataset's features, saved as a checkpoint."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+    from lerobot.utils.feature_utils import dataset_to_policy_features
+    from lerobot.policies.act.configuration_act import ACTConfig
+    from lerobot.policies.act.modeling_act import ACTPolicy
+    from lerobot.policies.factory import make_pre_post_processors
+
+    meta = LeRobotDatasetMetadata("local/colorsort", root=dataset_root)
+    features = dataset_to_policy_features(meta.features)
+    outputs = {k: f for k, f in features.items() if k == "action"}
+    inputs = {k: f for k, f in features.items() if k != "action"}
+    config = ACTConfig(input_features=inputs, output_features=outputs, device="cpu", pretrained_backbone_weights=None,
+                       dim_model=32, n_heads=2, dim_feedforward=64, n_encoder_layers=1, n_decoder_layers=1,
+                       use_vae=False, chunk_size=5, n_action_steps=5)
+    policy = ACTPolicy(config)
+    pre, post = make_pre_post_processors(config, dataset_stats=meta.stats)
+    policy.save_pretrained(out_dir)
+    pre.save_pretrained(out_dir)
+    post.save_pretrained(out_dir)
+    return out_dir
+
+
+def test_a_lerobot_policy_runs_an_episode_through_lerobots_env_config(tiny_dataset, tmp_path):
+    import torch
+    from lerobot.envs.factory import make_env, make_env_pre_post_processors
+    from lerobot.scripts.lerobot_eval import rollout
+
+    from colorsort.lerobot_env import ColorSortEnv
+    from colorsort.policies import LeRobotPolicy
+
+    checkpoint = tiny_act(tiny_dataset, tmp_path / "act")
+    loaded = LeRobotPolicy(checkpoint)  # what colorsort-eval --policy PATH loads
+    env_cfg = ColorSortEnv(image_size=64, episode_length=15)
+    envs = make_env(env_cfg, n_envs=1)["colorsort"][0]
+    env_pre, env_post = make_env_pre_post_processors(env_cfg, loaded.policy.config)
+    with torch.no_grad():
+        out = rollout(envs, loaded.policy, env_pre, env_post, loaded.preprocessor, loaded.postprocessor, seeds=[3])
+    envs.close()
+    assert tuple(out["action"].shape) == (1, 15, 8)  # one episode, truncated at 15 steps
+    assert bool(out["done"][0, -1]) and torch.isfinite(out["action"]).all()
+
+    report = evaluate(str(checkpoint), "default", episodes=1, image_size=(64, 64), progress=False, episode_length=10)
+    assert report.episodes == 1 and report.success_rate == 0.0 and report.per_episode[0]["steps"] == 10
+
+
