@@ -58,7 +58,9 @@ def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(capsys
     assert eval_main(["--policy", "random", "--episodes", "2", "--seed", "7", "--envs", "2", "--image-size", "32",
                       "--cameras", "scene"]) == 0
     assert "success rate" in capsys.readouterr().out
-    assert eval_main(["--episodes", "1", "--envs", "0"]) == 2
+    with pytest.raises(SystemExit) as exit_info:
+        eval_main(["--episodes", "1", "--envs", "0"])
+    assert exit_info.value.code == 2 and "--envs 0: give at least 1" in capsys.readouterr().err
 
 
 def test_distractors_are_let_through_and_counted():

@@ -61,3 +61,22 @@ def test_missing_gl_backend_gives_a_clear_message(tmp_path):
     if proc.returncode == 0:
         pytest.skip("this machine has OSMesa: no failing backend to show")
     assert "MUJOCO_GL='osmesa'" in proc.stderr and "MUJOCO_GL=egl" in proc.stderr
+
+
+def test_find_python_names_a_312_interpreter_or_says_what_to_install(tmp_path):
+    """make's interpreter search: LeRobot 0.6 needs Python >= 3.12."""
+    script = ROOT / "tools" / "find-python"
+    found = subprocess.run(["sh", str(script)], capture_output=True, text=True,
+                           env={**os.environ, "PYTHON": sys.executable})
+    assert found.returncode == 0
+    version = subprocess.run([found.stdout.strip(), "-c", "import sys; print(sys.version_info[:2] >= (3, 12))"],
+                             capture_output=True, text=True).stdout
+    assert version.strip() == "True"
+    old = tmp_path / "python3"  # a PATH whose only python3 is too old, and no pyenv or uv
+    old.write_text("#!/bin/sh\nexit 1\n")
+    old.chmod(0o755)
+    (tmp_path / "cat").symlink_to(shutil.which("cat"))
+    missing = subprocess.run(["/bin/sh", str(script)], capture_output=True, text=True,
+                             env={"PATH": str(tmp_path), "PYTHON": ""})
+    assert missing.returncode == 1 and missing.stdout == ""
+    assert "Python 3.12 or newer" in missing.stderr and "uv python install 3.12" in missing.stderr
