@@ -193,8 +193,8 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     expert = SortingExpert(env)
     dataset = LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
-        robot_type=config.robot, use_videos=True, rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec), streaming_encoding=True,
-        encoder_queue_maxsize=10_000, encoder_threads=1 if config.workers > 1 else None,
+        robot_type=config.robot, use_videos=True, video_backend="pyav", rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec),
+        streaming_encoding=True, encoder_queue_maxsize=10_000, encoder_threads=1 if config.workers > 1 else None,
     )
     sec["setup"] += time.perf_counter() - t0
     limit = episode_time_limit(config)
