@@ -255,3 +255,17 @@ def test_suite_make_takes_robosuites_reward_arguments():
     assert env.reward_scale is None and env.reward_shaping
     assert 0.0 <= env.reward() < 0.5
     env.close()
+
+
+# ---------------------------------------------------------------------- console output
+def test_console_scripts_print_no_robosuite_notices():
+    """robosuite's start-up warnings and INFO lines stay out of the commands' output, workers' included."""
+    from pathlib import Path
+
+    command = [str(Path(sys.executable).parent / "colorsort-eval"), "--policy", "random", "--episodes", "2",
+               "--envs", "2", "--image-size", "32", "--cameras", "scene"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")})
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "success rate" in done.stdout
+    assert "robosuite" not in done.stdout + done.stderr
