@@ -66,7 +66,7 @@ class CollectConfig:
     seed: int = 0  # base seed
     out: str = "datasets/colorsort"  # dataset directory (LeRobot's `root`)
     repo_id: str = "local/colorsort"  # LeRobot repo id, for loading: LeRobotDataset(repo_id, root=out)
-    cameras: tuple[str, ...] = ("scene", "wrist")  # stored as observation.images.<camera>
+    cameras: tuple[str, ...] = ("scene", "wrist")  # stored as observation.images.<camera>; () records state only
     image_size: tuple[int, int] = (128, 128)  # (height, width) of every camera [px]
     fps: int = 20  # frames per second = the env's control rate [Hz]
     workers: int = 1  # processes recording shards side by side
@@ -80,8 +80,8 @@ class CollectConfig:
         if self.robot not in ROBOTS:
             raise ValueError(f"Unknown robot {self.robot!r}. Valid robots: {list(ROBOTS)}")
         bad = [c for c in self.cameras if c not in CAMERAS]
-        if bad or not self.cameras or len(set(self.cameras)) != len(self.cameras):
-            raise ValueError(f"cameras={self.cameras}: give one or more distinct names from {list(CAMERAS)}")
+        if bad or len(set(self.cameras)) != len(self.cameras):
+            raise ValueError(f"cameras={self.cameras}: give distinct names from {list(CAMERAS)}, or none")
         if self.fps not in FPS_CHOICES:
             raise ValueError(f"fps={self.fps} not supported. Valid values: {list(FPS_CHOICES)}")
         if self.vcodec not in VCODECS:
@@ -157,11 +157,13 @@ def episode_time_limit(config: CollectConfig) -> float:
 
 
 def make_recording_env(config: CollectConfig):
-    """The env the collector records from: the dataset's cameras, every step."""
+    """The env the collector records from: the dataset's cameras, every step (none for a state-only dataset;
+    the expert still renders its own sensor photo)."""
     from colorsort.env import ColorSort
 
     h, w = config.image_size
-    return ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=True, camera_names=list(config.cameras),
+    return ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=bool(config.cameras),
+                     camera_names=list(config.cameras) or "scene",
                      camera_heights=h, camera_widths=w, control_freq=config.fps, ignore_done=True, seed=config.seed)
 
 
@@ -469,7 +471,8 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--seed", type=int, default=d.seed, help="base seed: episode i uses seed + i")
     parser.add_argument("--out", default=d.out, help="dataset directory")
     parser.add_argument("--repo-id", default=d.repo_id, help="LeRobot repo id of the dataset")
-    parser.add_argument("--cameras", default=",".join(d.cameras), help=f"comma-separated, any of {','.join(CAMERAS)}")
+    parser.add_argument("--cameras", default=",".join(d.cameras),
+                        help=f"comma-separated, any of {','.join(CAMERAS)}; 'none' records state only (no videos)")
     parser.add_argument("--image-size", default=str(d.image_size[0]), help="square size or HxW [px]")
     parser.add_argument("--fps", type=int, default=d.fps, help=f"frames per second, one of {FPS_CHOICES}")
     parser.add_argument("--workers", type=int, default=d.workers, help="recording processes")
@@ -481,7 +484,7 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
         return CollectConfig(
             episodes=args.episodes, boxes_per_episode=args.boxes_per_episode, preset=args.preset, robot=args.robot,
             seed=args.seed, out=args.out, repo_id=args.repo_id,
-            cameras=tuple(c.strip() for c in args.cameras.split(",") if c.strip()),
+            cameras=() if args.cameras.strip() == "none" else tuple(c.strip() for c in args.cameras.split(",") if c.strip()),
             image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
             resume=args.resume, overwrite=args.overwrite)
     except ValueError as err:

@@ -211,7 +211,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--episodes", type=int, default=10, help="episodes to run")
     parser.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's seeds)")
     parser.add_argument("--image-size", type=int, default=128, help="square camera images [px], as trained")
-    parser.add_argument("--cameras", default="scene,wrist", help="comma-separated cameras, as trained")
+    parser.add_argument("--cameras", default="scene,wrist",
+                        help="comma-separated cameras, as trained; 'none' for a state-only policy")
     parser.add_argument("--envs", type=int, default=1,
                         help="episodes run at once, each in its own process (same numbers whatever N)")
     parser.add_argument("--json", default=None, help="write the metrics as JSON here")
@@ -228,7 +229,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         get_variant(args.variant)
         report = evaluate(args.policy, args.variant, args.episodes, args.seed, (args.image_size, args.image_size),
-                          tuple(c for c in args.cameras.split(",") if c), envs=args.envs)
+                          () if args.cameras == "none" else tuple(c for c in args.cameras.split(",") if c),
+                          envs=args.envs)
     except ValueError as err:
         print(f"colorsort-eval: error: {err}", file=sys.stderr)
         return 2

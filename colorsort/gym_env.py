@@ -39,7 +39,8 @@ class ColorSortGymEnv(gym.Env):
 
     Args:
         variant: a name from ``colorsort.variants.VARIANTS``, or a ``Variant``.
-        cameras: the cameras in ``obs["pixels"]``, any of "scene", "sensor", "wrist".
+        cameras: the cameras in ``obs["pixels"]``, any of "scene", "sensor", "wrist"; with none, the
+            observation has no ``pixels`` (state only) and nothing renders unless ``render`` is called.
         image_size: (height, width) of every camera [px].
         fps: control rate [Hz].
         render_mode: "rgb_array" (the scene camera at ``image_size``) or None.
@@ -69,11 +70,14 @@ class ColorSortGymEnv(gym.Env):
         self._max_episode_steps = episode_length or int(np.ceil(self.variant.time_limit * fps))
         self.metadata = {**self.metadata, "render_fps": fps}
         n_joints = len(ROBOT_HOMES[self.variant.robot])
-        self.observation_space = spaces.Dict({
-            "pixels": spaces.Dict({c: spaces.Box(0, 255, (h, w, 3), np.uint8) for c in self.cameras}),
+        obs_spaces = {
             "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(n_joints),), np.float32),
             "environment_state": spaces.Box(-np.inf, np.inf, (ENV_STATE_SIZE,), np.float32),
-        })
+        }
+        if self.cameras:
+            obs_spaces = {"pixels": spaces.Dict({c: spaces.Box(0, 255, (h, w, 3), np.uint8) for c in self.cameras}),
+                          **obs_spaces}
+        self.observation_space = spaces.Dict(obs_spaces)
         low, high = action_bounds(self.variant.robot)
         self.action_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
         # What LeRobot's evaluator reads from every env (env.call): the task's name and its instruction
@@ -141,11 +145,10 @@ class ColorSortGymEnv(gym.Env):
 
     # ------------------------------------------------------------------ helpers
     def _observation(self) -> dict[str, Any]:
-        return {
-            "pixels": {c: self.raw_obs[f"{c}_image"] for c in self.cameras},
-            "agent_pos": robot_state(self.env, self.raw_obs),
-            "environment_state": box_state(self.env),
-        }
+        obs = {"agent_pos": robot_state(self.env, self.raw_obs), "environment_state": box_state(self.env)}
+        if self.cameras:
+            obs = {"pixels": {c: self.raw_obs[f"{c}_image"] for c in self.cameras}, **obs}
+        return obs
 
     def _info(self) -> dict[str, Any]:
         events = self.env.events[: self.variant.boxes]

@@ -10,7 +10,7 @@ installs the plugin distribution ``lerobot_env_colorsort``, which LeRobot's CLIs
 
 ``--env.task`` is a Gymnasium id without the ``colorsort/`` namespace (``ColorSort-v0`` or a
 variant's, see ``colorsort-eval --list``); ``--env.cameras`` and ``--env.image_size`` must match
-the dataset the policy was trained on (``--env.cameras=`` for a state-only policy).
+the dataset the policy was trained on (``--env.cameras=none`` for a state-only policy).
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ class ColorSortEnv(EnvConfig):
 
     task: str | None = "ColorSort-v0"
     fps: int = 20  # control rate [Hz], as recorded
-    cameras: str = "scene,wrist"  # comma-separated, as recorded by colorsort-collect --cameras; "" for none
+    cameras: str = "scene,wrist"  # comma-separated, as recorded by colorsort-collect --cameras; "none" for none
     image_size: int = 128  # square camera images [px]
     episode_length: int | None = None  # steps before truncation; default: the variant's time limit
     features: dict[str, PolicyFeature] = field(default_factory=dict)
@@ -66,6 +66,8 @@ class ColorSortEnv(EnvConfig):
 
     @property
     def camera_list(self) -> tuple[str, ...]:
+        if self.cameras.strip() == "none":
+            return ()
         return tuple(c.strip() for c in self.cameras.split(",") if c.strip())
 
     @property

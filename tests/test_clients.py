@@ -269,3 +269,13 @@ def test_console_scripts_print_no_robosuite_notices():
     assert done.returncode == 0, done.stderr[-2000:]
     assert "success rate" in done.stdout
     assert "robosuite" not in done.stdout + done.stderr
+
+
+def test_a_state_only_gym_env_has_no_pixels_and_passes_the_env_checker():
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym.make(DEFAULT_GYM_ID, cameras=(), render_mode=None)
+    check_env(env.unwrapped)
+    obs, _ = env.reset(seed=0)
+    assert set(obs) == {"agent_pos", "environment_state"} and not env.unwrapped.env.has_offscreen_renderer
+    env.close()

@@ -119,6 +119,16 @@ def test_every_variant_builds_and_steps_through_lerobots_make_env(gym_id):
     envs.close()
 
 
+def test_a_state_only_env_config_has_no_visual_features():
+    from lerobot.utils.constants import OBS_ENV_STATE, OBS_STATE
+
+    from colorsort.lerobot_env import ColorSortEnv
+
+    cfg = ColorSortEnv(cameras="none", task="ColorSort-RobotsPanda-v0")
+    assert set(cfg.features_map.values()) == {"action", OBS_STATE, OBS_ENV_STATE}
+    assert cfg.features["action"].shape == (9,) and cfg.gym_kwargs["cameras"] == ()  # the Panda has 7 joints
+
+
 def test_an_unknown_task_names_the_valid_ones():
     from colorsort.lerobot_env import ColorSortEnv
 
