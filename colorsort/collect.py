@@ -48,7 +48,7 @@ os.environ.setdefault("HF_DATASETS_DISABLE_PROGRESS_BARS", "1")  # one bar per e
 # Mesa's CPU renderer draws in the calling thread, with no helper threads competing with the
 # video encoder and with other workers for the cores.
 os.environ.setdefault("LP_NUM_THREADS", "0")
-from colorsort.env import CAMERAS  # noqa: E402
+from colorsort.env import CAMERAS, parse_cameras  # noqa: E402
 
 FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
 VCODECS = ("h264", "libsvtav1", "hevc")
@@ -484,7 +484,7 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
         return CollectConfig(
             episodes=args.episodes, boxes_per_episode=args.boxes_per_episode, preset=args.preset, robot=args.robot,
             seed=args.seed, out=args.out, repo_id=args.repo_id,
-            cameras=() if args.cameras.strip() == "none" else tuple(c.strip() for c in args.cameras.split(",") if c.strip()),
+            cameras=parse_cameras(args.cameras),
             image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
             resume=args.resume, overwrite=args.overwrite)
     except ValueError as err:

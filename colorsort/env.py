@@ -62,6 +62,13 @@ from colorsort.suction import VacuumSeal
 logger = logging.getLogger("colorsort")
 
 CAMERAS: tuple[str, ...] = ("scene", "sensor", "wrist")
+
+
+def parse_cameras(text: str) -> tuple[str, ...]:
+    """Camera names from a command line's comma-separated list; "none" (or nothing) for no cameras."""
+    if text.strip() == "none":
+        return ()
+    return tuple(c.strip() for c in text.split(",") if c.strip())
 WRIST_CAMERA_MJCF = "gripper0_right_wrist"  # robosuite prefixes the gripper's camera name
 SETTLED_SPEED = 0.05  # [m/s] a box slower than this inside a bin counts as resting there
 # The parts of MuJoCo's state that ColorSort changes while it runs (see ``get_sim_state``).

@@ -7,8 +7,8 @@ Example::
     colorsort-eval --list
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` + k), so the same
-command gives the same numbers, whatever ``--envs`` (episodes run at once, one process each). Metrics: success rate (every box of the episode where it belongs,
-none misplaced or dropped) with a 95% Wilson interval; boxes placed correctly, misplaced, dropped;
+command gives the same numbers, whatever ``--envs`` (episodes run at once, one process each).
+Metrics: success rate (every box of the episode where it belongs, none misplaced or dropped) with a 95% Wilson interval; boxes placed correctly, misplaced, dropped;
 distractors (boxes with no bin) let through; boxes per minute (boxes handled right, placed in
 their bin or let through, per minute of sim time); mean cycle time (sim time between consecutive
 boxes handled right).
@@ -29,8 +29,10 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from colorsort.env import parse_cameras
+from colorsort.gym_env import ColorSortGymEnv
 from colorsort.logs import quiet_robosuite_info
-from colorsort.policies import check_policy_spec
+from colorsort.policies import check_policy_spec, make_policy
 from colorsort.variants import VARIANTS, Variant, get_variant
 
 
@@ -88,9 +90,6 @@ class _Runner:
     """One env and one policy, built once per process, running episodes by seed."""
 
     def __init__(self, settings: EvalSettings):
-        from colorsort.gym_env import ColorSortGymEnv
-        from colorsort.policies import make_policy
-
         self.policy = make_policy(settings.policy)
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
                                    image_size=settings.image_size, episode_length=settings.episode_length,
@@ -229,8 +228,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         get_variant(args.variant)
         report = evaluate(args.policy, args.variant, args.episodes, args.seed, (args.image_size, args.image_size),
-                          () if args.cameras == "none" else tuple(c for c in args.cameras.split(",") if c),
-                          envs=args.envs)
+                          parse_cameras(args.cameras), envs=args.envs)
     except ValueError as err:
         print(f"colorsort-eval: error: {err}", file=sys.stderr)
         return 2

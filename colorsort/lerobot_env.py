@@ -23,6 +23,7 @@ from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
 from colorsort.config import ROBOT_HOMES
 from colorsort.dataset import ENV_STATE_SIZE, state_size
+from colorsort.env import parse_cameras
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, Variant, get_variant
 
 NAMESPACE = "colorsort"
@@ -66,9 +67,7 @@ class ColorSortEnv(EnvConfig):
 
     @property
     def camera_list(self) -> tuple[str, ...]:
-        if self.cameras.strip() == "none":
-            return ()
-        return tuple(c.strip() for c in self.cameras.split(",") if c.strip())
+        return parse_cameras(self.cameras)
 
     @property
     def package_name(self) -> str:

@@ -3,6 +3,7 @@
 (LeRobot's CLIs are in ``test_lerobot_cli.py``.)
 """
 
+import json
 import os
 import subprocess
 import sys
@@ -31,7 +32,7 @@ def run_fresh_python(code: str, timeout: float) -> subprocess.CompletedProcess:
 
 
 VECTOR_SCRIPT = """
-    import sys, numpy as np, gymnasium as gym, colorsort
+    import json, sys, numpy as np, gymnasium as gym, colorsort
     mode, context = sys.argv[1], sys.argv[2]
     kwargs = {} if context == "default" else {"vector_kwargs": {"context": context}}
     envs = gym.make_vec("colorsort/ColorSort-v0", num_envs=2, vectorization_mode=mode,
@@ -43,7 +44,7 @@ VECTOR_SCRIPT = """
     obs, info = envs.reset(seed=[3, 4])
     pixels = obs["pixels"]["scene"]
     assert pixels.shape == (2, 32, 32, 3) and pixels.std() > 5, pixels.std()  # real images, not blank
-    print("state", obs["agent_pos"][0].tolist())
+    print("state", json.dumps(obs["agent_pos"][0].tolist()))
     envs.close()
 """
 
@@ -59,7 +60,7 @@ def test_make_vec_steps_and_resets_in_every_mode_and_context(mode, context):
     first, _ = reference.reset(seed=3)
     reference.close()
     state = [line for line in done.stdout.splitlines() if line.startswith("state")][0]
-    assert np.allclose(eval(state.split(" ", 1)[1]), first["agent_pos"])  # reset(seed=3) in a worker = here
+    assert np.allclose(json.loads(state.split(" ", 1)[1]), first["agent_pos"])  # reset(seed=3) in a worker = here
 
 
 def test_a_fork_after_rendering_fails_at_once_with_advice_instead_of_hanging():
@@ -119,7 +120,7 @@ def test_robosuites_gym_wrapper_steps_colorsort():
     env.close()
 
 
-def test_robosuites_visualization_wrapper_shows_and_hides_the_grip_site():
+def test_robosuites_visualization_wrapper_shows_the_grip_site():
     from robosuite.wrappers import VisualizationWrapper
 
     env = VisualizationWrapper(make_env(has_offscreen_renderer=True))
