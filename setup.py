@@ -20,6 +20,8 @@ INSTALL_REQUIRES = [
     "ruckig>=0.19,<0.20",
     "tqdm>=4.66",
     "av>=15,<16",
+    # demos/train_baseline.py plots success against the number of demos:
+    "matplotlib>=3.8",
     # robosuite's real run-time needs, for `pip install --no-deps robosuite`:
     "numba>=0.59",
     "scipy>=1.11",

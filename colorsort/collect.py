@@ -40,8 +40,9 @@ from typing import Callable
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.config import PRESETS, ROBOTS, make_config, sorting_time_limit
+from colorsort.config import PRESETS, ROBOTS, TaskConfig, make_config, sorting_time_limit
 from colorsort.logs import quiet_robosuite_info
+from colorsort.variants import VARIANTS, get_variant
 
 os.environ.setdefault("SVT_LOG", "1")  # the AV1 encoder's banner and info lines: errors only
 os.environ.setdefault("HF_DATASETS_DISABLE_PROGRESS_BARS", "1")  # one bar per episode saved, otherwise
@@ -63,6 +64,7 @@ class CollectConfig:
     boxes_per_episode: int = 1  # an episode ends when this many boxes have left the belt
     preset: str = "default"  # task preset (config.PRESETS)
     robot: str = "IRB140"  # "IRB140", "Panda" or "UR5e"
+    variant: str | None = None  # record a benchmark variant's task (its preset, overrides, robot and lights)
     seed: int = 0  # base seed
     out: str = "datasets/colorsort"  # dataset directory (LeRobot's `root`)
     repo_id: str = "local/colorsort"  # LeRobot repo id, for loading: LeRobotDataset(repo_id, root=out)
@@ -75,6 +77,11 @@ class CollectConfig:
     overwrite: bool = False  # replace an existing dataset
 
     def __post_init__(self) -> None:
+        if self.variant is not None:
+            v = get_variant(self.variant)
+            if (self.preset, self.robot) != (v.preset, v.robot):
+                raise ValueError(f"variant {self.variant!r} sets the preset ({v.preset!r}) and robot ({v.robot!r}); "
+                                 f"got preset={self.preset!r}, robot={self.robot!r}: give the variant alone")
         if self.preset not in PRESETS:
             raise ValueError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
         if self.robot not in ROBOTS:
@@ -101,8 +108,13 @@ class CollectConfig:
 
     def settings(self) -> dict:
         """The settings every episode of one dataset must share (checked on --resume)."""
-        keys = ("boxes_per_episode", "preset", "robot", "seed", "repo_id", "cameras", "image_size", "fps", "vcodec")
+        keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps", "vcodec")
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
+
+    @property
+    def task_config(self) -> TaskConfig:
+        """The task the episodes run: the variant's, or the preset's."""
+        return get_variant(self.variant).task_config if self.variant else make_config(self.preset)
 
 
 @dataclass(frozen=True)
@@ -153,7 +165,7 @@ class CollectSummary:
 # ---------------------------------------------------------------------------------------- recording
 def episode_time_limit(config: CollectConfig) -> float:
     """[s] sim time after which an episode counts as failed."""
-    return sorting_time_limit(config.boxes_per_episode, make_config(config.preset))
+    return sorting_time_limit(config.boxes_per_episode, config.task_config)
 
 
 def make_recording_env(config: CollectConfig):
@@ -162,7 +174,7 @@ def make_recording_env(config: CollectConfig):
     from colorsort.env import ColorSort
 
     h, w = config.image_size
-    return ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=bool(config.cameras),
+    return ColorSort(robots=config.robot, config=config.task_config, use_camera_obs=bool(config.cameras),
                      camera_names=list(config.cameras) or "scene",
                      camera_heights=h, camera_widths=w, control_freq=config.fps, ignore_done=True, seed=config.seed)
 
@@ -187,12 +199,15 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's notes on every file it writes (lerobot restores
     # FFmpeg's own log callback, which prints at this level)
     from colorsort.expert import SortingExpert
+    from colorsort.lighting import LightRig
 
     out = ShardReport(str(root))
     sec = out.seconds
     t0 = time.perf_counter()
     env = make_recording_env(config)
     expert = SortingExpert(env)
+    variant = get_variant(config.variant) if config.variant else None
+    lights = LightRig(env.mj_model) if variant else None
     dataset = LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
         robot_type=config.robot, use_videos=True, video_backend="pyav", rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec),
@@ -205,6 +220,10 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
         for index in indices:
             seed = config.seed + index
             obs = env.reset(seed=seed)
+            if variant is not None:  # as the benchmark's gym env does: the same seed gives the same episode
+                lights.apply(variant.lighting(env.rng))
+                if variant.random_lights and config.cameras:
+                    obs = env.observe()
             expert.reset(obs)
             first = min(env.boxes_in_play(), key=lambda b: b.serial)
             task = task_text(first.color, k)
@@ -466,8 +485,11 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--episodes", type=int, default=d.episodes, help="episodes to try (seeds seed..seed+N-1)")
     parser.add_argument("--boxes-per-episode", type=int, default=d.boxes_per_episode,
                         help="boxes that leave the belt per episode")
-    parser.add_argument("--preset", default=d.preset, choices=sorted(PRESETS), help="task preset")
-    parser.add_argument("--robot", default=d.robot, choices=list(ROBOTS), help="robot arm")
+    parser.add_argument("--preset", default=None, choices=sorted(PRESETS), help=f"task preset (default {d.preset})")
+    parser.add_argument("--robot", default=None, choices=list(ROBOTS), help=f"robot arm (default {d.robot})")
+    parser.add_argument("--variant", default=None, choices=list(VARIANTS),
+                        help="record a benchmark variant's task (preset, overrides, robot, lights); "
+                             "not with --preset or --robot")
     parser.add_argument("--seed", type=int, default=d.seed, help="base seed: episode i uses seed + i")
     parser.add_argument("--out", default=d.out, help="dataset directory")
     parser.add_argument("--repo-id", default=d.repo_id, help="LeRobot repo id of the dataset")
@@ -480,10 +502,17 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--resume", action="store_true", help="add the missing episodes to an existing dataset")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset")
     args = parser.parse_args(argv)
+    if args.variant and (args.preset or args.robot):
+        parser.error("--variant sets the preset and robot: give --variant alone, or --preset/--robot")
+    if args.variant:
+        v = get_variant(args.variant)
+        preset, robot = v.preset, v.robot
+    else:
+        preset, robot = args.preset or d.preset, args.robot or d.robot
     try:
         return CollectConfig(
-            episodes=args.episodes, boxes_per_episode=args.boxes_per_episode, preset=args.preset, robot=args.robot,
-            seed=args.seed, out=args.out, repo_id=args.repo_id,
+            episodes=args.episodes, boxes_per_episode=args.boxes_per_episode, preset=preset, robot=robot,
+            variant=args.variant, seed=args.seed, out=args.out, repo_id=args.repo_id,
             cameras=parse_cameras(args.cameras),
             image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
             resume=args.resume, overwrite=args.overwrite)

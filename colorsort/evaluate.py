@@ -32,7 +32,7 @@ from tqdm import tqdm
 from colorsort.env import parse_cameras
 from colorsort.gym_env import ColorSortGymEnv
 from colorsort.logs import quiet_robosuite_info
-from colorsort.policies import check_policy_spec, make_policy
+from colorsort.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.variants import VARIANTS, Variant, get_variant
 
 
@@ -201,6 +201,28 @@ def format_report(r: EvalReport) -> str:
     return "\n".join(f"{k:<24} {v}" for k, v in rows)
 
 
+def observation_settings(policy_spec: str, cameras: str | None,
+                         image_size: int | None) -> tuple[tuple[str, ...], tuple[int, int]]:
+    """The cameras and (height, width) [px] to render for a policy: as given, else as a checkpoint was
+    trained (its ``config.json``), else scene and wrist at 128 px.
+
+    Raises:
+        ValueError: an unknown policy, or cameras/size other than those the checkpoint takes.
+    """
+    check_policy_spec(policy_spec)
+    given = parse_cameras(cameras) if cameras is not None else None
+    size = (image_size, image_size) if image_size is not None else None
+    if policy_spec in ("expert", "random"):
+        return (given if given is not None else ("scene", "wrist")), size or (128, 128)
+    trained, trained_size = checkpoint_cameras(policy_spec)
+    if given is not None and set(given) != set(trained):
+        raise ValueError(f"{policy_spec} was trained on cameras {list(trained) or 'none'}; got --cameras {cameras}")
+    if size is not None and trained_size is not None and size != trained_size:
+        raise ValueError(f"{policy_spec} was trained on {trained_size[0]}x{trained_size[1]} images; "
+                         f"got --image-size {image_size}")
+    return trained, trained_size or size or (128, 128)
+
+
 def main(argv: list[str] | None = None) -> int:
     quiet_robosuite_info()
     parser = argparse.ArgumentParser(prog="colorsort-eval", description=__doc__,
@@ -209,9 +231,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--variant", default="default", help="a variant name (see --list)")
     parser.add_argument("--episodes", type=int, default=10, help="episodes to run")
     parser.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's seeds)")
-    parser.add_argument("--image-size", type=int, default=128, help="square camera images [px], as trained")
-    parser.add_argument("--cameras", default="scene,wrist",
-                        help="comma-separated cameras, as trained; 'none' for a state-only policy")
+    parser.add_argument("--image-size", type=int, default=None,
+                        help="square camera images [px] (default: a checkpoint's own, else 128)")
+    parser.add_argument("--cameras", default=None,
+                        help="comma-separated cameras or 'none' (default: those a checkpoint was trained on, "
+                             "else scene,wrist)")
+    parser.add_argument("--episode-length", type=int, default=None,
+                        help="steps before an episode is truncated (default: the variant's time limit)")
     parser.add_argument("--envs", type=int, default=1,
                         help="episodes run at once, each in its own process (same numbers whatever N)")
     parser.add_argument("--json", default=None, help="write the metrics as JSON here")
@@ -227,8 +253,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--envs {args.envs}: give at least 1")
     try:
         get_variant(args.variant)
-        report = evaluate(args.policy, args.variant, args.episodes, args.seed, (args.image_size, args.image_size),
-                          parse_cameras(args.cameras), envs=args.envs)
+        cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
+        report = evaluate(args.policy, args.variant, args.episodes, args.seed, image_size, cameras,
+                          episode_length=args.episode_length, envs=args.envs)
     except ValueError as err:
         print(f"colorsort-eval: error: {err}", file=sys.stderr)
         return 2

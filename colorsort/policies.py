@@ -6,6 +6,7 @@ Each takes Gymnasium observations of a ``ColorSortGymEnv`` and returns its actio
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -98,6 +99,22 @@ def check_policy_spec(spec: str) -> None:
     if not (Path(spec) / "config.json").is_file():
         raise ValueError(f"{spec} is not a LeRobot checkpoint (no config.json); expected e.g. "
                          "outputs/train/<run>/checkpoints/last/pretrained_model")
+
+
+def checkpoint_cameras(path: str | Path) -> tuple[tuple[str, ...], tuple[int, int] | None]:
+    """The cameras a LeRobot checkpoint takes (``observation.images.<camera>`` inputs, in order) and their
+    (height, width) [px]; ``((), None)`` for a state-only policy. Reads ``config.json`` only."""
+    config = json.loads((Path(path) / "config.json").read_text())
+    prefix = "observation.images."
+    images = {k.removeprefix(prefix): f["shape"] for k, f in config.get("input_features", {}).items()
+              if k.startswith(prefix)}
+    if not images:
+        return (), None
+    sizes = {tuple(shape[-2:]) for shape in images.values()}  # (channels, height, width)
+    if len(sizes) != 1:
+        raise ValueError(f"{path}: cameras of different sizes {sorted(sizes)}; ColorSort renders one size")
+    (size,) = sizes
+    return tuple(images), (int(size[0]), int(size[1]))
 
 
 def make_policy(spec: str) -> Policy:

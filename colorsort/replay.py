@@ -29,9 +29,11 @@ import numpy as np
 from tqdm import tqdm
 
 from colorsort.collect import MARKER, parse_image_size
+from colorsort.config import make_config
 from colorsort.dataset import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
 from colorsort.env import CAMERAS, ColorSort
 from colorsort.logs import quiet_robosuite_info
+from colorsort.variants import get_variant
 from colorsort.video import VideoWriter, contact_sheet, save_png
 
 warnings.filterwarnings("ignore", message="Cannot enable progress bars")  # datasets, when HF_DATASETS_DISABLE_PROGRESS_BARS is set
@@ -106,7 +108,9 @@ def recorded_frames(episode: RecordedEpisode, camera: str) -> np.ndarray:
 
 def make_replay_env(episode: RecordedEpisode) -> ColorSort:
     s = episode.settings
-    return ColorSort(robots=s["robot"], preset=s["preset"], use_camera_obs=False, has_offscreen_renderer=True,
+    variant = s.get("variant")  # datasets recorded before variants were recordable have none
+    config = get_variant(variant).task_config if variant else make_config(s["preset"])
+    return ColorSort(robots=s["robot"], config=config, use_camera_obs=False, has_offscreen_renderer=True,
                      control_freq=s["fps"], ignore_done=True)
 
 

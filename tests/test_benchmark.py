@@ -99,3 +99,28 @@ def test_eval_cli_writes_the_json(tmp_path, capsys):
     data = json.loads(path.read_text())
     assert {"success_rate", "episodes", "correct", "misplaced", "dropped", "boxes_per_minute"} <= set(data)
     assert "success rate" in capsys.readouterr().out
+
+
+def test_eval_takes_a_checkpoints_cameras_unless_told_and_refuses_others(tmp_path):
+    """colorsort-eval --policy PATH renders what the checkpoint was trained on; other cameras or sizes are refused."""
+    from colorsort.evaluate import observation_settings
+
+    def checkpoint(name, inputs):
+        path = tmp_path / name
+        path.mkdir()
+        (path / "config.json").write_text(json.dumps({"type": "act", "input_features": inputs}))
+        return str(path)
+
+    state = {"observation.state": {"type": "STATE", "shape": [23]},
+             "observation.environment_state": {"type": "ENV", "shape": [13]}}
+    state_only = checkpoint("state", state)
+    vision = checkpoint("vision", {**state, "observation.images.wrist": {"type": "VISUAL", "shape": [3, 96, 96]}})
+    assert observation_settings(state_only, None, None) == ((), (128, 128))
+    assert observation_settings(state_only, "none", None) == ((), (128, 128))
+    assert observation_settings(vision, None, None) == (("wrist",), (96, 96))
+    assert observation_settings("expert", None, None) == (("scene", "wrist"), (128, 128))
+    assert observation_settings("expert", "sensor", 64) == (("sensor",), (64, 64))
+    with pytest.raises(ValueError, match="trained on cameras"):
+        observation_settings(state_only, "scene,wrist", None)
+    with pytest.raises(ValueError, match="96x96"):
+        observation_settings(vision, None, 128)

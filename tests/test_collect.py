@@ -153,3 +153,38 @@ def test_state_only_dataset_loads_in_lerobot_and_trains(tmp_path):
     assert train.returncode == 0, train.stderr[-3000:]
     config = json.loads((tmp_path / "train/checkpoints/last/pretrained_model/config.json").read_text())
     assert set(config["input_features"]) == {"observation.state", "observation.environment_state"}
+
+
+def test_a_variant_records_the_benchmarks_own_episode_for_each_seed(tmp_path):
+    """--variant jitter: the recorded episode is the one the benchmark's env gives for that seed (box off the
+    centre line and turned), replay rebuilds the variant's task, and the marker says which variant."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from colorsort.gym_env import ColorSortGymEnv
+    from colorsort.replay import replay
+    from colorsort.variants import get_variant
+
+    root = tmp_path / "jitter"
+    assert main(["--variant", "jitter", "--episodes", "1", "--seed", "7", "--cameras", "none", "--out", str(root)]) == 0
+    assert json.loads((root / MARKER).read_text())["settings"]["variant"] == "jitter"
+    first = LeRobotDataset("local/colorsort", root=root)[0]["observation.environment_state"].numpy()
+    env = ColorSortGymEnv(get_variant("jitter"), cameras=())
+    obs, _ = env.reset(seed=7)
+    env.close()
+    np.testing.assert_array_equal(first, obs["environment_state"])
+    default_env = ColorSortGymEnv(get_variant("default"), cameras=())
+    default_obs, _ = default_env.reset(seed=7)
+    default_env.close()
+    assert not np.array_equal(first[5:12], default_obs["environment_state"][5:12])  # jitter moved or turned the box
+    report = replay(root, 0, camera="scene", size=(32, 32), video=None, sheet=None, progress=False)
+    assert report.state_replay_ok and report.action_replay_ok and report.outcomes == ["placed"]
+
+
+def test_a_variant_and_a_preset_or_robot_are_not_given_together(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["--variant", "jitter", "--robot", "Panda"])
+    assert stop.value.code == 2 and "--variant" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="give the variant alone"):
+        CollectConfig(variant="robots-panda")  # robot IRB140 by default, the variant's is Panda
+    with pytest.raises(ValueError, match="Valid variants"):
+        CollectConfig(variant="nope")
