@@ -36,7 +36,7 @@ import shutil
 import subprocess
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 os.environ.setdefault("HF_HUB_OFFLINE", "1")  # no hub downloads, here or in the commands below
@@ -50,20 +50,32 @@ IRB140_VARIANTS = ("seed", "default", "fast", "jitter", "lighting", "distractors
 
 @dataclass(frozen=True)
 class PolicyPreset:
-    """ACT sized for a 2-core CPU: 0.67 M parameters, about 3 updates per second at batch 64."""
+    """LeRobot ACT settings passed to ``lerobot-train`` as ``--policy.<name>=<value>``."""
 
-    dim_model: int = 128
-    dim_feedforward: int = 512
-    n_heads: int = 4
-    n_encoder_layers: int = 2
-    n_decoder_layers: int = 1
+    dim_model: int
+    dim_feedforward: int
+    n_heads: int
+    n_encoder_layers: int
+    n_decoder_layers: int
     chunk_size: int = 20  # actions predicted per inference [steps of 50 ms]
     n_action_steps: int = 10  # of which the first are executed before the policy looks again
     use_vae: bool = False  # the expert is deterministic: one mode per state, nothing for a latent to explain
-    optimizer_lr: float = 1e-4  # LeRobot's 1e-5 is tuned for a pretrained ResNet backbone; this ACT starts from scratch
+    optimizer_lr: float = 1e-4  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
+    optimizer_lr_backbone: float = 1e-4
+    pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
 
     def args(self) -> list[str]:
-        return [f"--policy.{k}={str(v).lower() if isinstance(v, bool) else v}" for k, v in asdict(self).items()]
+        text = {True: "true", False: "false", None: "null"}
+        return [f"--policy.{k}={text.get(v, v) if isinstance(v, (bool, type(None))) else v}"
+                for k, v in asdict(self).items()]
+
+
+POLICY_PRESETS = {
+    # 0.67 M parameters, about 3 updates per second at batch 64 on 2 CPU cores
+    "state": PolicyPreset(dim_model=128, dim_feedforward=512, n_heads=4, n_encoder_layers=2, n_decoder_layers=1),
+    # LeRobot's ACT size with a ResNet-18 trained from scratch on the cameras: for a GPU
+    "vision": PolicyPreset(dim_model=512, dim_feedforward=3200, n_heads=8, n_encoder_layers=4, n_decoder_layers=1),
+}
 
 
 @dataclass(frozen=True)
@@ -83,7 +95,17 @@ class BaselineConfig:
     envs: int = 2  # evaluation processes
     workers: int = 2  # collection processes
     out: str = "outputs/baseline"
-    policy: PolicyPreset = field(default_factory=PolicyPreset)
+    cameras: tuple[str, ...] = ()  # () trains on states; cameras train a vision policy (see README's GPU recipe)
+    image_size: int = 128  # [px], square, with cameras
+    device: str = "cpu"  # lerobot-train's --policy.device: "cpu", "cuda" or "mps"
+
+    @property
+    def policy(self) -> PolicyPreset:
+        return POLICY_PRESETS["vision" if self.cameras else "state"]
+
+    @property
+    def label(self) -> str:
+        return f"ACT, {'+'.join(self.cameras) if self.cameras else 'state'}"
 
     def __post_init__(self) -> None:
         from colorsort.variants import get_variant
@@ -93,6 +115,12 @@ class BaselineConfig:
         if not self.demos or any(n < len(self.train_variants) for n in self.demos) or list(self.demos) != sorted(set(self.demos)):
             raise ValueError(f"demos={self.demos}: give increasing counts, each at least the number of training "
                              f"variants ({len(self.train_variants)})")
+        from colorsort.env import CAMERAS
+
+        if any(c not in CAMERAS for c in self.cameras):
+            raise ValueError(f"cameras={self.cameras}: give names from {list(CAMERAS)}, or none")
+        if self.device not in ("cpu", "cuda", "mps"):
+            raise ValueError(f"device={self.device!r}: valid devices are ['cpu', 'cuda', 'mps']")
         if "default" not in self.eval_variants:
             raise ValueError("eval_variants must include 'default' (the plot's variant)")
         for name in ("steps", "small_steps", "batch_size", "eval_episodes", "other_episodes", "envs", "workers"):
@@ -124,7 +152,7 @@ def split_demos(n: int, variants: tuple[str, ...]) -> dict[str, int]:
 def collect(config: BaselineConfig, n: int, out: Path) -> Path:
     """The state-only dataset of ``n`` demos (reused if there)."""
     root = out / "data" / f"demos-{n}"
-    if (root / "meta" / "info.json").is_file():
+    if (root / "meta" / "info.json").is_file() and (root / "meta" / "complete").is_file():
         print(f"reusing {root}")
         return root
     parts = []
@@ -134,15 +162,24 @@ def collect(config: BaselineConfig, n: int, out: Path) -> Path:
             shutil.rmtree(part, ignore_errors=True)
             run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
                  "--boxes-per-episode", str(config.boxes_per_episode), "--seed", str(1_000_000 * k),
-                 "--cameras", "none", "--workers", str(config.workers), "--out", str(part), "--repo-id", REPO_ID],
+                 "--cameras", ",".join(config.cameras) or "none", "--image-size", str(config.image_size),
+                 "--workers", str(config.workers), "--out", str(part), "--repo-id", REPO_ID],
                 log=out / "logs" / f"collect-{variant}-{count}.log")
         parts.append(part)
-    if len(parts) == 1:
-        shutil.copytree(parts[0], root)
-    else:
-        from lerobot.datasets.aggregate import aggregate_datasets
+    shutil.rmtree(root, ignore_errors=True)
+    merged = out / "data" / f".demos-{n}.merged"
+    shutil.rmtree(merged, ignore_errors=True)
+    from lerobot.datasets.aggregate import aggregate_datasets
 
-        aggregate_datasets([REPO_ID] * len(parts), REPO_ID, roots=parts, aggr_root=root)
+    aggregate_datasets([REPO_ID] * len(parts), REPO_ID, roots=parts, aggr_root=merged if config.cameras else root)
+    if config.cameras:  # a vision policy must see the box's colour and pose, not read them from the simulator
+        from lerobot.datasets.dataset_tools import remove_feature
+        from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+        remove_feature(LeRobotDataset(REPO_ID, root=merged), "observation.environment_state", output_dir=root,
+                       repo_id=REPO_ID)
+        shutil.rmtree(merged)
+    (root / "meta" / "complete").write_text("")
     return root
 
 
@@ -158,7 +195,8 @@ def train(config: BaselineConfig, data: Path, steps: int, out: Path) -> tuple[Pa
         print(f"removing {run_dir}, an unfinished training run")
         shutil.rmtree(run_dir)
     seconds = run([str(BIN / "lerobot-train"), f"--dataset.repo_id={REPO_ID}", f"--dataset.root={data}",
-                   "--policy.type=act", "--policy.device=cpu", "--policy.push_to_hub=false", *config.policy.args(),
+                   "--policy.type=act", f"--policy.device={config.device}", "--policy.push_to_hub=false",
+                   *config.policy.args(),
                    f"--batch_size={config.batch_size}", f"--steps={steps}", f"--save_freq={steps}",
                    "--log_freq=200", "--num_workers=1", "--seed=1000", "--wandb.enable=false",
                    f"--output_dir={run_dir}"],
@@ -182,7 +220,7 @@ def evaluate(config: BaselineConfig, model: Path, variant: str, out: Path, tag: 
     return json.loads(path.read_text())
 
 
-def plot(rows: list[dict], path: Path) -> None:
+def plot(rows: list[dict], label: str, path: Path) -> None:
     """Success rate on ``default`` (95% Wilson interval) against the number of demos."""
     import matplotlib
 
@@ -202,7 +240,7 @@ def plot(rows: list[dict], path: Path) -> None:
     ax.set_ylim(-2, 102)
     ax.set_xlabel("expert demos (episodes of 3 boxes)")
     ax.set_ylabel("success on default [%]")
-    ax.set_title(f"State-based ACT on ColorSort, {rows[0]['episodes']} evaluation seeds", fontsize=9)
+    ax.set_title(f"{label} on ColorSort, {rows[0]['episodes']} evaluation seeds", fontsize=9)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -210,14 +248,14 @@ def plot(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
-def table(results: list[dict]) -> str:
+def table(results: list[dict], label: str) -> str:
     lines = ["| variant | policy | demos | training | success rate (95% CI) | correct | misplaced | dropped "
              "| distractors let through | boxes/min | mean cycle [s] |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in results:
         lo, hi = r["success_ci95"]
         cycle = f"{r['mean_cycle_time_s']:.2f}" if r["mean_cycle_time_s"] is not None else "-"
-        lines.append(f"| {r['variant']} | ACT, state | {r['demos']} | {r['steps']} steps, {r['train_minutes']:.0f} min "
+        lines.append(f"| {r['variant']} | {label} | {r['demos']} | {r['steps']} steps, {r['train_minutes']:.0f} min "
                      f"| {100 * r['success_rate']:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%) | {r['correct']} | {r['misplaced']} "
                      f"| {r['dropped']} | {r['distractors_let_through']}/{r['distractors']} | {r['boxes_per_minute']:.1f} "
                      f"| {cycle} |")
@@ -242,6 +280,11 @@ def parameters(model: Path) -> int:
         return sum(math.prod(f.get_slice(k).get_shape()) for k in f.keys())
 
 
+def machine(device: str) -> str:
+    """One line: this machine's CPU cores and the training device."""
+    return f"a {os.cpu_count()}-core machine, training on {'the CPU' if device == 'cpu' else device}"
+
+
 def ship(config: BaselineConfig, model: Path, results: list[dict], plot_path: Path, dest: Path, argv: list[str],
          started: str, wall_s: float) -> None:
     """The largest set's policy to ``dest``: LeRobot's pretrained_model files, the plot and a README."""
@@ -254,29 +297,32 @@ def ship(config: BaselineConfig, model: Path, results: list[dict], plot_path: Pa
     largest = [r for r in results if r["demos"] == config.demos[-1]]
     size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
     mix = ", ".join(f"{c} on {v}" for v, c in split_demos(config.demos[-1], config.train_variants).items())
-    (dest / "README.md").write_text(f"""# {dest.name}: a state-based ACT baseline for ColorSort (IRB 140)
+    inputs = (f"`observation.state` and the cameras {', '.join(config.cameras)} at {config.image_size} px (not "
+              "`observation.environment_state`: the policy sees the boxes)" if config.cameras else
+              "`observation.state` and `observation.environment_state`: no cameras")
+    (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort (IRB 140), {config.label}
 
 LeRobot ACT ({parameters(dest) / 1e6:.2f} M parameters, {config.policy.dim_model}-dim, {config.policy.n_encoder_layers} encoder and
 {config.policy.n_decoder_layers} decoder layers, chunks of {config.policy.chunk_size} actions of which
 {config.policy.n_action_steps} are executed, no VAE, learning rate {config.policy.optimizer_lr}) on
-`observation.state` and `observation.environment_state`: no cameras. {size_mb:.1f} MB.
+{inputs}. {size_mb:.1f} MB.
 
 Made by `python demos/train_baseline.py {shlex.join(argv)}` on commit {commit()}, started {started},
-{wall_s / 60:.0f} min in all on a 2-core CPU machine with no GPU: {config.demos[-1]} expert demos
-({mix}; {config.boxes_per_episode} boxes each, state only), {largest[0]['steps']} updates at batch
+{wall_s / 60:.0f} min in all on {machine(config.device)}: {config.demos[-1]} expert demos tried
+({mix}; {config.boxes_per_episode} boxes each), {largest[0]['steps']} updates at batch
 {config.batch_size} ({largest[0]['train_minutes']:.0f} min of `lerobot-train`).
 
 Run it:
 
 ```
 colorsort-eval --policy {dest} --variant default --episodes 50
-HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task=ColorSort-Default-v0 --env.cameras=none \\
+HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task=ColorSort-Default-v0 --env.cameras={",".join(config.cameras) or "none"} --env.image_size={config.image_size} \\
     --policy.path={dest} --policy.device=cpu --eval.n_episodes=50 --eval.batch_size=2
 ```
 
 Scores (`colorsort-eval`, each variant's fixed evaluation seeds):
 
-{table(largest)}
+{table(largest, config.label)}
 
 Success on `default` against the number of demos: `success_vs_demos.png`.
 """)
@@ -299,6 +345,9 @@ def parse_args(argv: list[str]) -> tuple[BaselineConfig, argparse.Namespace]:
     p.add_argument("--envs", type=int, default=d.envs, help="evaluation processes")
     p.add_argument("--workers", type=int, default=d.workers, help="collection processes")
     p.add_argument("--out", default=d.out, help="working folder: datasets, training runs, evaluations, logs")
+    p.add_argument("--cameras", default="none", help="'none' (a state-based policy) or cameras for a vision policy")
+    p.add_argument("--image-size", type=int, default=d.image_size, help="camera images [px], square")
+    p.add_argument("--device", default=d.device, help="lerobot-train's device: cpu, cuda or mps")
     p.add_argument("--ship", default=None, help="copy the largest set's policy here with a README")
     p.add_argument("--fresh", action="store_true", help="delete OUT first instead of reusing its finished stages")
     args = p.parse_args(argv)
@@ -308,7 +357,9 @@ def parse_args(argv: list[str]) -> tuple[BaselineConfig, argparse.Namespace]:
             boxes_per_episode=args.boxes_per_episode, steps=args.steps, small_steps=args.small_steps,
             batch_size=args.batch_size, eval_variants=tuple(args.eval_variants.split(",")),
             eval_episodes=args.eval_episodes, other_episodes=args.other_episodes, episode_length=args.episode_length,
-            envs=args.envs, workers=args.workers, out=args.out)
+            envs=args.envs, workers=args.workers, out=args.out,
+            cameras=() if args.cameras == "none" else tuple(args.cameras.split(",")), image_size=args.image_size,
+            device=args.device)
     except ValueError as err:
         p.error(str(err))
         raise
@@ -337,13 +388,13 @@ def main(argv: list[str] | None = None) -> int:
             row = {"demos": episodes, "steps": config.steps if largest else config.small_steps,
                    "train_minutes": seconds / 60, **{k: v for k, v in report.items() if k != "per_episode"}}
             results.append(row)
-            print(table([row]).splitlines()[-1], flush=True)
+            print(table([row], config.label).splitlines()[-1], flush=True)
     on_default = [r for r in results if r["variant"] == "default"]
     plot_path = out / "success_vs_demos.png"
-    plot(on_default, plot_path)
+    plot(on_default, config.label, plot_path)
     wall = time.perf_counter() - t0
     (out / "results.json").write_text(json.dumps({"config": asdict(config), "wall_s": wall, "results": results}, indent=1))
-    print(f"\n{table(results)}\n\nplot: {plot_path}\nresults: {out / 'results.json'}\n"
+    print(f"\n{table(results, config.label)}\n\nplot: {plot_path}\nresults: {out / 'results.json'}\n"
           f"wall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
     if args.ship:
         ship(config, model, results, plot_path, Path(args.ship), argv, started, wall)

@@ -85,3 +85,20 @@ def test_the_shipped_baseline_runs_in_lerobot_eval(tmp_path):
     assert result.returncode == 0, result.stderr[-3000:]
     overall = json.loads((tmp_path / "eval" / "eval_info.json").read_text())["overall"]
     assert overall["n_episodes"] == 1 and 0 <= overall["pc_success"] <= 100
+
+
+def test_the_vision_recipe_runs_in_small_on_the_cpu(tmp_path):
+    """README's GPU recipe with the device set to the CPU and everything tiny: the policy takes the camera and
+    not the simulator's box state, and colorsort-eval renders what it was trained on."""
+    out = tmp_path / "vision"
+    result = run([sys.executable, str(REPO / "demos" / "train_baseline.py"), "--cameras", "wrist", "--image-size", "32",
+                  "--device", "cpu", "--demos", "1", "--train-variants", "default", "--steps", "2", "--batch-size", "2",
+                  "--eval-variants", "default", "--eval-episodes", "1", "--episode-length", "5", "--workers", "1",
+                  "--envs", "1", "--out", str(out)], tmp_path, timeout=900)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    info = json.loads((out / "data" / "demos-1" / "meta" / "info.json").read_text())
+    assert "observation.images.wrist" in info["features"] and "observation.environment_state" not in info["features"]
+    config = json.loads((out / "train" / "demos-1" / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text())
+    assert set(config["input_features"]) == {"observation.state", "observation.images.wrist"}
+    assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 512
+    assert "| default | ACT, wrist | 1 | 2 steps" in result.stdout

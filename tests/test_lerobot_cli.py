@@ -182,3 +182,21 @@ def test_a_lerobot_policy_runs_an_episode_through_lerobots_env_config(tiny_datas
     assert report.episodes == 1 and report.success_rate == 0.0 and report.per_episode[0]["steps"] == 10
 
 
+
+
+def test_readme_command_makes_a_state_only_copy_of_a_dataset_with_cameras(tiny_dataset, tmp_path):
+    """README's lerobot-edit-dataset command, verbatim: the camera features go, states and actions stay."""
+    import shutil
+
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    shutil.copytree(tiny_dataset, tmp_path / "datasets" / "colorsort")
+    result = run(readme_command("lerobot-edit-dataset"), tmp_path, timeout=300)
+    assert result.returncode == 0, result.stderr[-3000:]
+    original = LeRobotDataset("local/colorsort", root=tmp_path / "datasets" / "colorsort", video_backend="pyav")
+    state_only = LeRobotDataset("local/colorsort-state", root=tmp_path / "datasets" / "colorsort-state")
+    assert original.meta.video_keys and state_only.meta.video_keys == []
+    assert state_only.num_episodes == original.num_episodes and state_only.num_frames == original.num_frames
+    last = len(original) - 1
+    for key in ("observation.state", "observation.environment_state", "action"):
+        assert np.array_equal(state_only[last][key].numpy(), original[last][key].numpy())
