@@ -80,7 +80,7 @@ POLICY_PRESETS = {
 
 @dataclass(frozen=True)
 class BaselineConfig:
-    demos: tuple[int, ...] = (40, 100, 200)  # demo counts, the last one trains the shipped policy
+    demos: tuple[int, ...] = (8, 40, 200)  # demo counts, the last one trains the shipped policy
     # demos split evenly over these: a default-only policy sorted 10/10 default episodes but let no
     # distractor through (0/10), misplaced jittered boxes (6/10) and stalled on fast (6/10)
     train_variants: tuple[str, ...] = ("default", "jitter", "fast", "distractors")
@@ -185,7 +185,7 @@ def collect(config: BaselineConfig, n: int, out: Path) -> Path:
 
 def train(config: BaselineConfig, data: Path, steps: int, out: Path) -> tuple[Path, float]:
     """``lerobot-train`` on ``data``; returns the last checkpoint and the training wall time [s] (reused if there)."""
-    run_dir = out / "train" / data.name
+    run_dir = out / "train" / f"{data.name}-{steps}steps"
     model = run_dir / "checkpoints" / "last" / "pretrained_model"
     timing = run_dir / "wall_seconds.txt"
     if (model / "config.json").is_file() and timing.is_file():
@@ -200,7 +200,7 @@ def train(config: BaselineConfig, data: Path, steps: int, out: Path) -> tuple[Pa
                    f"--batch_size={config.batch_size}", f"--steps={steps}", f"--save_freq={steps}",
                    "--log_freq=200", "--num_workers=1", "--seed=1000", "--wandb.enable=false",
                    f"--output_dir={run_dir}"],
-                  log=out / "logs" / f"train-{data.name}.log")
+                  log=out / "logs" / f"train-{run_dir.name}.log")
     timing.write_text(f"{seconds:.1f}")
     return model, seconds
 
@@ -384,7 +384,7 @@ def main(argv: list[str] | None = None) -> int:
         model, seconds = train(config, data, config.steps if largest else config.small_steps, out)
         episodes = json.loads((data / "meta" / "info.json").read_text())["total_episodes"]
         for variant in (config.eval_variants if largest else ("default",)):
-            report = evaluate(config, model, variant, out, data.name)
+            report = evaluate(config, model, variant, out, model.parents[2].name)
             row = {"demos": episodes, "steps": config.steps if largest else config.small_steps,
                    "train_minutes": seconds / 60, **{k: v for k, v in report.items() if k != "per_episode"}}
             results.append(row)

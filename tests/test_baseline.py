@@ -98,7 +98,7 @@ def test_the_vision_recipe_runs_in_small_on_the_cpu(tmp_path):
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     info = json.loads((out / "data" / "demos-1" / "meta" / "info.json").read_text())
     assert "observation.images.wrist" in info["features"] and "observation.environment_state" not in info["features"]
-    config = json.loads((out / "train" / "demos-1" / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text())
+    config = json.loads((out / "train" / "demos-1-2steps" / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text())
     assert set(config["input_features"]) == {"observation.state", "observation.images.wrist"}
     assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 512
     assert "| default | ACT, wrist | 1 | 2 steps" in result.stdout
