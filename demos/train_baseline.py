@@ -288,8 +288,6 @@ def machine(device: str) -> str:
 def ship(config: BaselineConfig, model: Path, results: list[dict], plot_path: Path, dest: Path, argv: list[str],
          started: str, wall_s: float) -> None:
     """The largest set's policy to ``dest``: LeRobot's pretrained_model files, the plot and a README."""
-    if dest.exists() and any(dest.iterdir()):
-        raise FileExistsError(f"{dest} exists: remove it first, or ship elsewhere")
     dest.mkdir(parents=True, exist_ok=True)
     for f in model.iterdir():
         shutil.copy2(f, dest / f.name)
@@ -308,7 +306,7 @@ LeRobot ACT ({parameters(dest) / 1e6:.2f} M parameters, {config.policy.dim_model
 {inputs}. {size_mb:.1f} MB.
 
 Made by `python demos/train_baseline.py {shlex.join(argv)}` on commit {commit()}, started {started},
-{wall_s / 60:.0f} min in all on {machine(config.device)}: {config.demos[-1]} expert demos tried
+{wall_s / 60:.0f} min for this run (stages reused from earlier runs not counted) on {machine(config.device)}: {config.demos[-1]} expert demos tried
 ({mix}; {config.boxes_per_episode} boxes each), {largest[0]['steps']} updates at batch
 {config.batch_size} ({largest[0]['train_minutes']:.0f} min of `lerobot-train`).
 
@@ -380,12 +378,13 @@ def main(argv: list[str] | None = None) -> int:
     results: list[dict] = []
     for n in config.demos:
         largest = n == config.demos[-1]
+        steps = config.steps if largest else config.small_steps
         data = collect(config, n, out)
-        model, seconds = train(config, data, config.steps if largest else config.small_steps, out)
+        model, seconds = train(config, data, steps, out)
         episodes = json.loads((data / "meta" / "info.json").read_text())["total_episodes"]
         for variant in (config.eval_variants if largest else ("default",)):
             report = evaluate(config, model, variant, out, model.parents[2].name)
-            row = {"demos": episodes, "steps": config.steps if largest else config.small_steps,
+            row = {"demos": episodes, "steps": steps,
                    "train_minutes": seconds / 60, **{k: v for k, v in report.items() if k != "per_episode"}}
             results.append(row)
             print(table([row], config.label).splitlines()[-1], flush=True)
