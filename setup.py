@@ -53,9 +53,9 @@ setup(
     install_requires=INSTALL_REQUIRES,
     extras_require=EXTRAS_REQUIRE,
     entry_points={"console_scripts": [
-        "colorsort-sort=colorsort.sort:main",
-        "colorsort-collect=colorsort.collect:main",
-        "colorsort-replay=colorsort.replay:main",
-        "colorsort-eval=colorsort.evaluate:main",
+        "colorsort-sort=colorsort.cli.sort:main",
+        "colorsort-collect=colorsort.cli.collect:main",
+        "colorsort-replay=colorsort.cli.replay:main",
+        "colorsort-eval=colorsort.cli.eval:main",
     ]},
 )

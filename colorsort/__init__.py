@@ -7,20 +7,20 @@ and the Gymnasium ids ``colorsort/ColorSort-v0`` and one per benchmark variant
 """
 
 from colorsort.logs import quiet_robosuite_startup
-from colorsort.rendering import ensure_gl_backend, gl_error, is_gl_failure
+from colorsort.cell.rendering import ensure_gl_backend, gl_error, is_gl_failure
 
 ensure_gl_backend()  # before robosuite imports mujoco's renderer
 quiet_robosuite_startup()  # before robosuite logs its import-time notices
 
 try:
-    from colorsort import models  # registers IRB140 and SuctionGripper
-    from colorsort.env import ColorSort  # registers the task
+    from colorsort.cell import models  # registers IRB140 and SuctionGripper
+    from colorsort.cell.env import ColorSort  # registers the task
 except Exception as error:  # robosuite loads its GL context module at import time
     if is_gl_failure(error):
         raise gl_error(error) from error
     raise
 
-from colorsort.gym_env import register_envs  # noqa: E402
+from colorsort.benchmark.gym_env import register_envs  # noqa: E402
 
 register_envs()
 

@@ -1,7 +1,7 @@
-"""Task configuration: the cell's fixed layout and the tunable task parameters, with presets.
+"""Task configuration: the cell's fixed layout, the tunable task parameters with presets, and lights.
 
 Everything is a frozen dataclass; ``make_config("seed", belt_speed=0.08)`` picks a preset and
-overrides fields one by one, validating every value.
+overrides fields one by one, validating every value. Per-robot data lives in ``robots.py``.
 """
 
 from __future__ import annotations
@@ -18,32 +18,6 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
     "purple": (0.55, 0.15, 0.65, 1.0),
 }
 BIN_COLORS: tuple[str, ...] = ("red", "green", "blue")
-ROBOTS: tuple[str, ...] = ("IRB140", "Panda", "UR5e")
-GRIPPERS: tuple[str, ...] = ("SuctionGripper", "default")
-# Home poses [rad]: the cup 0.55 m up, 0.45 m in front of the base, pointing down. robosuite's
-# own Panda and UR5e poses are for a table on a pedestal and hit the bins here.
-ROBOT_HOMES: dict[str, tuple[float, ...]] = {
-    "IRB140": (0.0, 0.0, 0.0, 0.0, 1.5708, 0.0),
-    "Panda": (0.0, -0.3143, 0.0, -1.8538, 0.0, 1.5395, 0.785),
-    "UR5e": (-0.3024, -1.6395, 1.2246, -1.1559, -1.5708, -0.3023),
-}
-
-# Where each robot's base stands on the floor [m]. The UR5e's shoulder is offset 0.14 m to the
-# side of its base axis and its upper arm swings low: 6 cm further back, it clears the bins.
-ROBOT_BASES: dict[str, tuple[float, float, float]] = {
-    "IRB140": (0.0, 0.0, 0.0),
-    "Panda": (0.0, 0.0, 0.0),
-    "UR5e": (-0.06, 0.0, 0.0),
-}
-# Maximum joint speeds [rad/s] from the makers' datasheets: ABB IRB 140 (200, 200, 260, 360, 360,
-# 450 deg/s), Franka Emika Panda, Universal Robots UR5e (180 deg/s on every joint).
-ROBOT_JOINT_SPEEDS: dict[str, tuple[float, ...]] = {
-    "IRB140": (3.4907, 3.4907, 4.5379, 6.2832, 6.2832, 7.8540),
-    "Panda": (2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61),
-    "UR5e": (3.1416, 3.1416, 3.1416, 3.1416, 3.1416, 3.1416),
-}
-
-
 @dataclass(frozen=True)
 class CellLayout:
     """Where things stand, in the world frame [m]; the robot base is at the origin on the floor.
@@ -100,15 +74,15 @@ class TaskConfig:
     time_limit: float = 60.0  # [s] sim time per episode (sets robosuite's horizon)
 
     def __post_init__(self) -> None:
-        _check_range("belt_speed", self.belt_speed, 0.0, 0.5, low_inclusive=False)
-        _check_range("spawn_period", self.spawn_period, 0.5, 600.0)
-        _check_range("bin_capacity", self.bin_capacity, 1, 100)
-        _check_range("boxes_to_sort", self.boxes_to_sort, 1, 10_000)
-        _check_range("pool_size", self.pool_size, 1, 64)
-        _check_range("lateral_jitter", self.lateral_jitter, 0.0, 0.06)
-        _check_range("yaw_jitter", self.yaw_jitter, 0.0, 45.0)
-        _check_range("box_mass", self.box_mass, 0.05, 5.0)
-        _check_range("time_limit", self.time_limit, 1.0, 36_000.0)
+        check_range("belt_speed", self.belt_speed, 0.0, 0.5, low_inclusive=False)
+        check_range("spawn_period", self.spawn_period, 0.5, 600.0)
+        check_range("bin_capacity", self.bin_capacity, 1, 100)
+        check_range("boxes_to_sort", self.boxes_to_sort, 1, 10_000)
+        check_range("pool_size", self.pool_size, 1, 64)
+        check_range("lateral_jitter", self.lateral_jitter, 0.0, 0.06)
+        check_range("yaw_jitter", self.yaw_jitter, 0.0, 45.0)
+        check_range("box_mass", self.box_mass, 0.05, 5.0)
+        check_range("time_limit", self.time_limit, 1.0, 36_000.0)
         # Bins hold up to bin_capacity - 1 boxes each between emptyings; with fewer boxes than
         # that plus two, the pool could end up entirely in bins and the spawner would starve.
         min_pool = len(BIN_COLORS) * (self.bin_capacity - 1) + 2
@@ -125,7 +99,9 @@ class TaskConfig:
         object.__setattr__(self, "box_colors", tuple(self.box_colors))
 
 
-def _check_range(name: str, value: float, low: float, high: float, low_inclusive: bool = True) -> None:
+def check_range(name: str, value: float, low: float, high: float, low_inclusive: bool = True) -> None:
+    """``ValueError`` naming ``name`` and the valid interval unless ``low <= value <= high``
+    (``low < value`` when not ``low_inclusive``)."""
     ok_low = value >= low if low_inclusive else value > low
     if not (ok_low and value <= high):
         bracket = "[" if low_inclusive else "("
@@ -138,6 +114,36 @@ PRESETS: dict[str, TaskConfig] = {
     # Four times the original's belt speed, a box every 4 s: room for 15 boxes a minute.
     "default": TaskConfig(),
 }
+
+
+def is_distractor(color: str) -> bool:
+    """A box colour with no bin: the right thing is to let it through."""
+    return color not in BIN_COLORS
+
+
+@dataclass(frozen=True)
+class Lighting:
+    """One lighting and sensor condition (``cell.lighting`` applies it; it never recolours boxes or bins).
+
+    Attributes:
+        brightness: scale of every light's intensity (1 = as built; 0.5 = half, 2 = double).
+        tint: RGB colour of the light, each in (0, 1]; (1, 1, 1) is white.
+        noise_std: standard deviation of Gaussian sensor noise [8-bit intensity levels].
+        shadow: fraction of light removed inside a shadow band across the image, in [0, 1).
+    """
+
+    brightness: float = 1.0
+    tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    noise_std: float = 0.0
+    shadow: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_range("brightness", self.brightness, 0.05, 5.0)
+        if len(self.tint) != 3 or not all(0.0 < t <= 1.0 for t in self.tint):
+            raise ValueError(f"tint={self.tint} must be three values in (0, 1]")
+        check_range("noise_std", self.noise_std, 0.0, 50.0)
+        if not 0.0 <= self.shadow < 1.0:
+            raise ValueError(f"shadow={self.shadow!r} is out of range; valid values lie in [0.0, 1.0)")
 
 
 def sorting_time_limit(boxes: int, task: TaskConfig) -> float:

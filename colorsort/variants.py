@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from colorsort.config import BIN_COLORS, COLORS, ROBOTS, TaskConfig, make_config, sorting_time_limit
-from colorsort.lighting import Lighting
+from colorsort.config import COLORS, Lighting, TaskConfig, make_config, sorting_time_limit
+from colorsort.robots import get_robot
 
 EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
 
@@ -50,8 +50,7 @@ class Variant:
     seeds: tuple[int, ...] = field(default=EVAL_SEEDS)
 
     def __post_init__(self) -> None:
-        if self.robot not in ROBOTS:
-            raise ValueError(f"Unknown robot {self.robot!r}. Valid robots: {list(ROBOTS)}")
+        get_robot(self.robot)  # validates the robot
         self.task_config  # validates the preset and overrides
 
     @property
@@ -100,6 +99,6 @@ def get_variant(name: str) -> Variant:
     return VARIANTS[name]
 
 
-def is_distractor(color: str) -> bool:
-    """A box colour with no bin: the right thing is to let it pass."""
-    return color not in BIN_COLORS
+def gym_ids() -> dict[str, str]:
+    """Every Gymnasium id -> its variant's name: ``colorsort/ColorSort-v0`` (default) and one per variant."""
+    return {DEFAULT_GYM_ID: "default", **{v.gym_id: name for name, v in VARIANTS.items()}}

@@ -22,7 +22,9 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-from colorsort.collect import CollectConfig, CollectSummary, collect, parse_image_size  # noqa: E402
+from colorsort.cli.args import parse_image_size  # noqa
+from colorsort.data.collect import CollectSummary, collect  # noqa
+from colorsort.data.config import CollectConfig  # noqa: E402
 
 
 def run(config: CollectConfig) -> CollectSummary:

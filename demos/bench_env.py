@@ -19,7 +19,7 @@ import numpy as np
 import robosuite as suite
 
 import colorsort  # noqa: F401
-from colorsort.env import CAMERAS, WRIST_CAMERA_MJCF
+from colorsort.cell.cameras import CAMERAS, WRIST_CAMERA_MJCF
 
 
 def timed(fn, seconds: float) -> float:
@@ -45,8 +45,8 @@ def main() -> None:
     substeps = int(round(env.control_timestep / env.model_timestep))
 
     # Raw physics on a copy of the same compiled model and state, controls frozen.
-    model = env.sim.model._model
-    data = copy.copy(env.sim.data._data)
+    model = env.mj_model
+    data = copy.copy(env.mj_data)
     raw = timed(lambda: mujoco.mj_step(model, data), args.seconds)
     env_rate = timed(lambda: env.step(hold), args.seconds) * substeps
 

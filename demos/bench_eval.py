@@ -2,7 +2,7 @@
 
     python demos/bench_eval.py [--policy expert] [--variant default] [--episodes 8] [--repeats 2]
 
-Runs ``colorsort.evaluate.evaluate`` with ``envs=1`` and ``envs=2`` side by side, alternating,
+Runs ``colorsort.benchmark.evaluate.evaluate`` with ``envs=1`` and ``envs=2`` side by side, alternating,
 ``--repeats`` times each, on the same seeds, and prints wall time, episodes per minute, the
 speed-up of 2 over 1 (median and range over the repeats), and checks that both give the same
 numbers. Wall time includes starting the worker processes and building their envs, as a user sees.
@@ -18,7 +18,7 @@ import time
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-from colorsort.evaluate import evaluate  # noqa: E402
+from colorsort.benchmark.evaluate import evaluate  # noqa: E402
 from colorsort.logs import quiet_robosuite_info  # noqa: E402
 
 

@@ -17,10 +17,10 @@ import time
 
 import numpy as np
 
-from colorsort.env import ColorSort
-from colorsort.lighting import CONDITIONS
-from colorsort.perception import UNKNOWN, ColorSensor
-from colorsort.sensor_views import ViewSampler, wrap_quarter_turn
+from colorsort.cell.env import ColorSort
+from colorsort.cell.lighting import CONDITIONS
+from colorsort.expert.perception import UNKNOWN, ColorSensor
+from colorsort.expert.sensor_views import ViewSampler, wrap_quarter_turn
 
 COLORS = ("red", "green", "blue", "yellow", "purple")
 CASES = [(name, name, "single") for name in CONDITIONS] + [("partial", "normal", "partial"), ("two boxes", "normal", "two_boxes")]

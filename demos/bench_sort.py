@@ -19,11 +19,12 @@ from multiprocessing import get_context
 
 import numpy as np
 
-from colorsort.config import PRESETS, ROBOTS
+from colorsort.config import PRESETS
+from colorsort.robots import ROBOTS
 
 
 def run_one(preset: str, robot: str, boxes: int, seed: int) -> tuple[int, dict, float]:
-    from colorsort.sort import SortConfig, run_sort
+    from colorsort.benchmark.sorting import SortConfig, run_sort
 
     t0 = time.perf_counter()
     report = run_sort(SortConfig(preset=preset, robot=robot, boxes=boxes, seed=seed), progress=False, log=lambda _: None)

@@ -2,7 +2,7 @@
 
     python demos/bench_suite.py [--episodes 10] [--workers 2] [--image-size 64]
 
-Runs ``colorsort.evaluate.evaluate`` for each (policy, variant) pair on the variant's fixed
+Runs ``colorsort.benchmark.evaluate.evaluate`` for each (policy, variant) pair on the variant's fixed
 evaluation seeds, the pairs spread over worker processes, and prints one Markdown table row per
 pair (what README's baseline table shows). Camera size does not change what these two policies
 do (the expert takes its own 128 px sensor photo), so small images keep it fast.
@@ -17,7 +17,7 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-from colorsort.evaluate import EvalReport, evaluate  # noqa: E402
+from colorsort.benchmark.evaluate import EvalReport, evaluate  # noqa: E402
 from colorsort.variants import VARIANTS  # noqa: E402
 
 

@@ -5,7 +5,7 @@ Example: ``python demos/collect_demos.py --episodes 50 --workers 2 --out dataset
 
 import sys
 
-from colorsort.collect import main
+from colorsort.cli.collect import main
 
 if __name__ == "__main__":
     sys.exit(main())

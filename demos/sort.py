@@ -2,7 +2,7 @@
 
 import sys
 
-from colorsort.sort import main
+from colorsort.cli.sort import main
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -115,7 +115,7 @@ class BaselineConfig:
         if not self.demos or any(n < len(self.train_variants) for n in self.demos) or list(self.demos) != sorted(set(self.demos)):
             raise ValueError(f"demos={self.demos}: give increasing counts, each at least the number of training "
                              f"variants ({len(self.train_variants)})")
-        from colorsort.env import CAMERAS
+        from colorsort.cell.cameras import CAMERAS
 
         if any(c not in CAMERAS for c in self.cameras):
             raise ValueError(f"cameras={self.cameras}: give names from {list(CAMERAS)}, or none")

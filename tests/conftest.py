@@ -34,7 +34,8 @@ TINY = dict(episodes=2, image_size=(64, 64), cameras=("scene", "wrist"))  # two 
 @pytest.fixture(scope="session")
 def tiny_dataset(tmp_path_factory):
     """Two one-box episodes of the expert, 64x64 scene and wrist cameras, recorded once per session."""
-    from colorsort.collect import CollectConfig, collect
+    from colorsort.data.collect import collect
+    from colorsort.data.config import CollectConfig
 
     root = tmp_path_factory.mktemp("datasets") / "tiny"
     summary = collect(CollectConfig(out=str(root), **TINY), progress=False, log=lambda _: None)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from colorsort.env import ColorSort
+from colorsort.cell.env import ColorSort
 
 CUP_DOWN = np.array([0.0, 0.0, -1.0])  # world direction of the cup's approach axis when picking
 
@@ -26,7 +26,7 @@ def cup_site(env: ColorSort) -> int:
 
 def solve_cup_ik(env: ColorSort, target: np.ndarray, q_init: np.ndarray | None = None, iters: int = 300) -> np.ndarray:
     """Joint angles [rad] that put the cup pad's centre at ``target`` [m], cup facing down."""
-    m = env.sim.model._model
+    m = env.mj_model
     d = mujoco.MjData(m)
     d.qpos[:] = env.sim.data.qpos
     qadr, dadr = arm_joint_ids(env)

@@ -9,7 +9,7 @@ from pathlib import Path
 import cv2
 import pytest
 
-from colorsort.evaluate import main as eval_main
+from colorsort.cli.eval import main as eval_main
 
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent

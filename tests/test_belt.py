@@ -18,14 +18,14 @@ def test_belt_carries_box_at_its_speed_without_spinning(speed):
     for _ in range(10):  # let it settle onto the belt and come up to speed
         env.step(hold_action(env))
     x0, t0 = env.box_pos(box), env.cur_time
-    quat0 = env.sim.data.body_xquat[env._box_body[box.index]].copy()
+    quat0 = env.sim.data.body_xquat[env.plant.pool.body[box.index]].copy()
     for _ in range(40):  # 2 s
         env.step(hold_action(env))
     x1 = env.box_pos(box)
     v = (x1 - x0) / (env.cur_time - t0)
     assert -v[0] == pytest.approx(speed, rel=0.05)
     assert abs(v[1]) < 1e-3 and abs(v[2]) < 1e-3
-    quat1 = env.sim.data.body_xquat[env._box_body[box.index]]
+    quat1 = env.sim.data.body_xquat[env.plant.pool.body[box.index]]
     assert abs(abs(quat0 @ quat1) - 1.0) < 1e-4  # no rotation
     env.close()
 
@@ -43,7 +43,7 @@ def test_belt_stops_when_ray_blocked_and_restarts_when_clear(env):
     assert env.box_pos(box)[0] == pytest.approx(stop_x, abs=1e-4)
     followers = [b for b in env.boxes_in_play() if b is not box]
     before = [env.box_pos(b)[0] for b in followers]
-    env._park(box)  # take the box away: the ray clears
+    env.remove_box(box)  # take the box away: the ray clears
     obs, _, _, info = env.step(hold_action(env))
     assert info["belt_running"] and not info["box_detected"]
     assert float(obs["belt_running"]) == 1.0
@@ -58,7 +58,7 @@ def test_box_riding_past_the_end_is_dropped():
     env.reset()
     (box,) = env.boxes_in_play()
     L = env.layout
-    qa = env._box_qpos[box.index]
+    qa = env.plant.pool.qpos[box.index]
     env.sim.data.qpos[qa : qa + 3] = (L.belt_end_x + 0.03, L.belt_y, L.belt_top_z + 0.05)  # downstream of the ray
     env.sim.forward()
     dropped = 0
@@ -76,7 +76,7 @@ def test_spawner_waits_when_the_pool_is_empty():
     for _ in range(int(8 / env.control_timestep)):  # 8 s: 16 boxes due, 2 in the pool
         _, _, _, info = env.step(hold_action(env))
     assert info["spawned"] == 2 and len(env.boxes_in_play()) == 2
-    env._park(env.boxes_in_play()[0])  # one returns to the pool
+    env.remove_box(env.boxes_in_play()[0])  # one returns to the pool
     for _ in range(int(1 / env.control_timestep)):
         _, _, _, info = env.step(hold_action(env))
     assert info["spawned"] == 3

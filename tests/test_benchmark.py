@@ -8,8 +8,10 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from colorsort.config import BIN_COLORS, COLORS
-from colorsort.evaluate import evaluate, main as eval_main, wilson_interval
-from colorsort.gym_env import ColorSortGymEnv
+from colorsort.benchmark.evaluate import evaluate
+from colorsort.benchmark.metrics import wilson_interval
+from colorsort.cli.eval import main as eval_main
+from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
@@ -80,7 +82,7 @@ def test_light_randomisation_never_changes_box_or_bin_colours():
         env.reset(seed=seed)
         lights.append(m.light_diffuse.copy())
         for box in env.env.boxes_in_play():
-            assert np.allclose(m.geom_rgba[env.env._box_geom[box.index]], COLORS[box.color])
+            assert np.allclose(m.geom_rgba[env.env.plant.pool.geom[box.index]], COLORS[box.color])
         assert np.array_equal(m.geom_rgba[bin_geoms], bins_before)
     assert not np.allclose(lights[0], lights[1])  # the lights did change
     env.close()
@@ -103,7 +105,7 @@ def test_eval_cli_writes_the_json(tmp_path, capsys):
 
 def test_eval_takes_a_checkpoints_cameras_unless_told_and_refuses_others(tmp_path):
     """colorsort-eval --policy PATH renders what the checkpoint was trained on; other cameras or sizes are refused."""
-    from colorsort.evaluate import observation_settings
+    from colorsort.benchmark.evaluate import observation_settings
 
     def checkpoint(name, inputs):
         path = tmp_path / name

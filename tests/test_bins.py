@@ -11,7 +11,7 @@ from colorsort.config import BIN_COLORS
 def drop_into_bin(env, box, color: str, height: float = 0.45):
     """Teleport a box above the named bin at rest, then let it fall."""
     x, y = env.layout.bin_center(BIN_COLORS.index(color))
-    qa, va = env._box_qpos[box.index], env._box_qvel[box.index]
+    qa, va = env.plant.pool.qpos[box.index], env.plant.pool.qvel[box.index]
     env.sim.data.qpos[qa : qa + 7] = (x, y, height, 1, 0, 0, 0)
     env.sim.data.qvel[va : va + 6] = 0
     env.sim.forward()
@@ -58,7 +58,7 @@ def test_box_on_floor_is_dropped():
     env = make_env(spawn_period=100.0)
     env.reset()
     box = the_box(env, "red")
-    qa = env._box_qpos[box.index]
+    qa = env.plant.pool.qpos[box.index]
     env.sim.data.qpos[qa : qa + 3] = (0.5, -1.2, 0.3)
     env.sim.forward()
     reward, info = run(env, 1.5)

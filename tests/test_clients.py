@@ -17,8 +17,8 @@ from conftest import make_env
 from test_bins import drop_into_bin, run, the_box
 from test_expert import make_expert_env, run_until
 
-from colorsort.env import action_bounds
-from colorsort.gym_env import ColorSortGymEnv
+from colorsort.robots import ROBOTS
+from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
 
 SMALL = dict(cameras=("scene",), image_size=(32, 32))
@@ -91,7 +91,7 @@ def test_the_gym_env_builds_no_simulation_until_it_is_used():
 @pytest.mark.parametrize("robot", ["IRB140", "Panda", "UR5e"])
 def test_action_bounds_without_an_env_match_the_envs_action_spec(robot):
     env = make_env(robot)
-    low, high = action_bounds(robot)
+    low, high = ROBOTS[robot].action_bounds()
     assert np.array_equal(low, env.action_spec[0]) and np.array_equal(high, env.action_spec[1])
     env.close()
 
@@ -157,7 +157,7 @@ def test_robosuites_domain_randomization_wrapper_keeps_box_colours():
         obs, _, _, _ = env.step(np.zeros(8))
     assert obs["scene_image"].shape == (32, 32, 3)
     for box in base.boxes_in_play():
-        assert np.allclose(base.sim.model.geom_rgba[base._box_geom[box.index]], COLORS[box.color])
+        assert np.allclose(base.sim.model.geom_rgba[base.plant.pool.geom[box.index]], COLORS[box.color])
     env.close()
 
 

@@ -8,9 +8,14 @@ import pyarrow.parquet as pq
 import pytest
 from conftest import TINY
 
-from colorsort import collect as collect_module
-from colorsort.collect import MARKER, CollectConfig, collect, main, parse_image_size, split
-from colorsort.expert import SortingExpert
+from colorsort.data import recorder as recorder_module
+from colorsort.cli.args import parse_image_size
+from colorsort.cli.collect import main
+from colorsort.data.collect import collect
+from colorsort.data.config import CollectConfig
+from colorsort.data.shards import split
+from colorsort.data.store import MARKER
+from colorsort.expert.sorter import SortingExpert
 
 
 def data_table(root):
@@ -107,7 +112,7 @@ def test_same_seeds_give_the_same_data_whatever_the_worker_count(tiny_dataset, t
 
 
 def test_failed_episodes_are_tried_counted_and_not_kept(tmp_path, monkeypatch):
-    monkeypatch.setattr(collect_module, "episode_time_limit", lambda config: 1.0)  # no box gets sorted in 1 s
+    monkeypatch.setattr(recorder_module, "episode_time_limit", lambda config: 1.0)  # no box gets sorted in 1 s
     summary = collect(CollectConfig(out=str(tmp_path / "ds"), **TINY), progress=False, log=lambda _: None)
     assert summary.tried == 2 and summary.kept == 0 and summary.not_kept == {"timeout": 2}
     assert not (tmp_path / "ds").exists()
@@ -160,8 +165,8 @@ def test_a_variant_records_the_benchmarks_own_episode_for_each_seed(tmp_path):
     centre line and turned), replay rebuilds the variant's task, and the marker says which variant."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    from colorsort.gym_env import ColorSortGymEnv
-    from colorsort.replay import replay
+    from colorsort.benchmark.gym_env import ColorSortGymEnv
+    from colorsort.data.replay import replay
     from colorsort.variants import get_variant
 
     root = tmp_path / "jitter"

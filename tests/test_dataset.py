@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from conftest import TINY
 
-from colorsort.collect import MARKER
+from colorsort.data.store import MARKER
 from colorsort.config import COLORS
-from colorsort.dataset import ACTION, ENV_STATE, SIM_STATE, STATE, image_key
+from colorsort.data.schema import ACTION, ENV_STATE, SIM_STATE, STATE, image_key
 
 FPS = 20
 
@@ -75,12 +75,13 @@ def test_actions_are_what_the_expert_did(ds):
 
 def test_videos_decode_to_the_frames_the_env_rendered(ds, tiny_dataset):
     """Re-run episode 0's seed (the run is deterministic) and compare its camera frames with the video."""
-    from colorsort.collect import CollectConfig, make_recording_env
-    from colorsort.expert import SortingExpert
+    from colorsort.data.config import CollectConfig
+    from colorsort.data.recorder import make_recording_env
+    from colorsort.expert.sorter import SortingExpert
 
     env = make_recording_env(CollectConfig(**TINY))
     obs = env.reset(seed=0)
-    expert = SortingExpert(env)
+    expert = SortingExpert.from_env(env)
     expert.reset(obs)
     frames = {cam: [] for cam in TINY["cameras"]}
     for _ in range(ds.meta.episodes[0]["length"]):
@@ -105,3 +106,12 @@ def test_marker_records_settings_and_the_seed_of_each_episode(tiny_dataset):
     marker = json.loads((tiny_dataset / MARKER).read_text())
     assert marker["episodes"] == [0, 1] and marker["tried"] == [0, 1] and marker["failed"] == {}
     assert marker["settings"]["image_size"] == [64, 64] and marker["settings"]["robot"] == "IRB140"
+
+
+def test_marker_records_the_sim_state_layout_and_its_version(tiny_dataset):
+    from colorsort.cell.sim_state import VERSION
+
+    layout = json.loads((tiny_dataset / MARKER).read_text())["sim_state"]
+    info = json.loads((tiny_dataset / "meta" / "info.json").read_text())
+    assert layout["version"] == VERSION
+    assert layout["segments"]["rng"][1] == info["features"][SIM_STATE]["shape"][0]

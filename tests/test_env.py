@@ -5,7 +5,8 @@ import pytest
 import robosuite as suite
 from conftest import make_env
 
-from colorsort.config import PRESETS, ROBOTS, TaskConfig, make_config
+from colorsort.config import PRESETS, TaskConfig, make_config
+from colorsort.robots import ROBOTS
 
 
 @pytest.mark.parametrize(
@@ -71,7 +72,7 @@ def test_random_actions_for_1s_no_warnings_no_nan(robot, preset):
     rng = np.random.default_rng(0)
     for _ in range(int(env.control_freq)):
         obs, reward, _, info = env.step(rng.uniform(low, high))
-    d = env.sim.data._data
+    d = env.mj_data
     assert all(w.number == 0 for w in d.warning), [(i, w.number) for i, w in enumerate(d.warning) if w.number]
     assert np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))
     assert np.all(np.isfinite(obs["robot0_proprio-state"]))
@@ -99,7 +100,7 @@ def test_info_keys_and_success():
         assert key in info
     assert not done and not info["is_success"]
     x, y = env.layout.bin_center(["red", "green", "blue"].index(box.color))
-    qa = env._box_qpos[box.index]
+    qa = env.plant.pool.qpos[box.index]
     env.sim.data.qpos[qa : qa + 3] = (x, y, 0.4)
     env.sim.forward()
     for _ in range(40):

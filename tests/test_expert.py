@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from conftest import make_env
 
-from colorsort.expert import Phase, SortingExpert
-from colorsort.sort import main as sort_main
+from colorsort.expert.sorter import Phase, SortingExpert
+from colorsort.cli.sort import main as sort_main
 
 
 def make_expert_env(robot="IRB140", **kwargs):
     env = make_env(robot, has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor"], **kwargs)
     obs = env.reset()
-    expert = SortingExpert(env)
+    expert = SortingExpert.from_env(env)
     expert.reset(obs)
     return env, expert, obs
 
@@ -96,7 +96,7 @@ def test_expert_needs_the_sensor_camera():
     env = make_env()
     env.reset()
     with pytest.raises(ValueError, match="sensor camera"):
-        SortingExpert(env)
+        SortingExpert.from_env(env)
     env.close()
 
 
@@ -118,3 +118,25 @@ def test_sort_cli_bad_arguments_exit_2(argv, capsys):
         sort_main(argv)
     assert exit_info.value.code == 2
     assert "error" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kwargs,name", [
+    (dict(carry_z=2.0), "carry_z"), (dict(drop_slots=0), "drop_slots"), (dict(wait_tolerance=0.0), "wait_tolerance"),
+    (dict(grip_timeout=-1.0), "grip_timeout"),
+])
+def test_expert_config_refuses_values_out_of_range_naming_them(kwargs, name):
+    from colorsort.expert.config import ExpertConfig
+
+    with pytest.raises(ValueError, match=rf"{name}=.* valid values lie in"):
+        ExpertConfig(**kwargs)
+
+
+def test_the_expert_is_built_from_a_calibration_not_the_env():
+    from colorsort.expert.calibration import Calibration
+
+    env, expert, _ = make_expert_env()
+    cal = expert.calibration
+    assert isinstance(cal, Calibration) and not hasattr(expert, "env")
+    assert np.array_equal(cal.home, env.robot_spec.home) and cal.control_period == env.control_timestep
+    assert cal.camera.width == 128 and cal.kinematics.nq == len(env.robot_spec.home)
+    env.close()

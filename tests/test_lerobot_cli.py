@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from colorsort.evaluate import evaluate
+from colorsort.benchmark.evaluate import evaluate
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
 
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -48,7 +48,7 @@ def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProce
 @pytest.fixture(scope="module")
 def readme_checkpoint(tmp_path_factory):
     """README's lerobot-train command, 2 steps, on a one-episode dataset recorded with colorsort-collect's defaults."""
-    from colorsort.collect import CollectConfig, collect
+    from colorsort.data.collect import CollectConfig, collect
 
     work = tmp_path_factory.mktemp("readme")
     collect(CollectConfig(out=str(work / "datasets" / "colorsort"), episodes=1), progress=False, log=lambda _: None)
@@ -100,7 +100,7 @@ def test_every_variant_builds_and_steps_through_lerobots_make_env(gym_id):
     from lerobot.envs.factory import make_env
     from lerobot.envs.utils import preprocess_observation
 
-    from colorsort.lerobot_env import ColorSortEnv
+    from colorsort.benchmark.lerobot_env import ColorSortEnv
 
     cfg = ColorSortEnv(task=gym_id.removeprefix("colorsort/"), image_size=32, episode_length=3)
     envs = make_env(cfg, n_envs=1)["colorsort"][0]
@@ -122,7 +122,7 @@ def test_every_variant_builds_and_steps_through_lerobots_make_env(gym_id):
 def test_a_state_only_env_config_has_no_visual_features():
     from lerobot.utils.constants import OBS_ENV_STATE, OBS_STATE
 
-    from colorsort.lerobot_env import ColorSortEnv
+    from colorsort.benchmark.lerobot_env import ColorSortEnv
 
     cfg = ColorSortEnv(cameras="none", task="ColorSort-RobotsPanda-v0")
     assert set(cfg.features_map.values()) == {"action", OBS_STATE, OBS_ENV_STATE}
@@ -130,7 +130,7 @@ def test_a_state_only_env_config_has_no_visual_features():
 
 
 def test_an_unknown_task_names_the_valid_ones():
-    from colorsort.lerobot_env import ColorSortEnv
+    from colorsort.benchmark.lerobot_env import ColorSortEnv
 
     with pytest.raises(ValueError, match="Valid tasks: .*ColorSort-Jitter-v0"):
         ColorSortEnv(task="ColorSort-Hard-v0")
@@ -164,8 +164,8 @@ def test_a_lerobot_policy_runs_an_episode_through_lerobots_env_config(tiny_datas
     from lerobot.envs.factory import make_env, make_env_pre_post_processors
     from lerobot.scripts.lerobot_eval import rollout
 
-    from colorsort.lerobot_env import ColorSortEnv
-    from colorsort.policies import LeRobotPolicy
+    from colorsort.benchmark.lerobot_env import ColorSortEnv
+    from colorsort.benchmark.policies import LeRobotPolicy
 
     checkpoint = tiny_act(tiny_dataset, tmp_path / "act")
     loaded = LeRobotPolicy(checkpoint)  # what colorsort-eval --policy PATH loads

@@ -6,12 +6,14 @@ import pytest
 from conftest import make_env
 from helpers import arm_joint_ids
 
-from colorsort.models.irb140 import HOME_QPOS, JOINT_LIMITS_DEG, JOINT_SPEED_LIMITS_DEG_S, dh_forward_kinematics
+from colorsort.cell.models.irb140 import HOME_QPOS, JOINT_LIMITS_DEG, dh_forward_kinematics
+
+DATASHEET_SPEEDS_DEG_S = (200, 200, 260, 360, 360, 450)  # ABB IRB 140 product specification
 
 
 @pytest.mark.parametrize("seed", range(4))
 def test_forward_kinematics_matches_dh_table(env, seed):
-    m, d = env.sim.model._model, mujoco.MjData(env.sim.model._model)
+    m, d = env.mj_model, mujoco.MjData(env.mj_model)
     qadr, _ = arm_joint_ids(env)
     hand = m.body("robot0_right_hand").id
     q = np.zeros(6) if seed == 0 else np.random.default_rng(seed).uniform(-1.5, 1.5, 6)
@@ -28,17 +30,17 @@ def test_zero_pose_is_abb_calibration_pose():
 
 
 def test_joint_and_speed_limits_are_in_the_model(env):
-    m = env.sim.model._model
+    m = env.mj_model
     joints = env.robots[0].robot_model.joints
     ranges = np.array([m.jnt_range[m.joint(j).id] for j in joints])
     assert np.allclose(np.rad2deg(ranges), JOINT_LIMITS_DEG, atol=0.01)
     assert all(m.jnt_limited[m.joint(j).id] for j in joints)
     speeds = m.numeric("robot0_joint_velocity_limits").data
-    assert np.allclose(np.rad2deg(speeds), JOINT_SPEED_LIMITS_DEG_S, atol=0.01)
+    assert np.allclose(np.rad2deg(speeds), DATASHEET_SPEEDS_DEG_S, atol=0.01)
 
 
 def test_visual_and_collision_geoms_are_separate(env):
-    m = env.sim.model._model
+    m = env.mj_model
     robot_geoms = [i for i in range(m.ngeom) if m.geom(i).name.startswith("robot0_")]
     visual = [g for g in robot_geoms if m.geom_group[g] == 1]
     collision = [g for g in robot_geoms if m.geom_group[g] == 0]
@@ -48,7 +50,7 @@ def test_visual_and_collision_geoms_are_separate(env):
 
 
 def test_masses_are_plausible(env):
-    m = env.sim.model._model
+    m = env.mj_model
     bodies = [m.body(b).id for b in env.robots[0].robot_model.bodies]
     total = sum(m.body_mass[b] for b in bodies)
     assert 80 < total < 110  # datasheet: 98 kg
@@ -78,3 +80,27 @@ def test_suction_gripper_mounts_on_robosuite_arms(robot):
         obs, _, _, info = env.step(np.concatenate([q, [1.0, -1.0]]))
     assert np.abs(obs["robot0_joint_pos"] - q).max() < 0.01
     env.close()
+
+
+@pytest.mark.parametrize("xml", [("irb140", "robot.xml"), ("suction_gripper", "suction_gripper.xml")])
+def test_mjcf_geoms_take_the_visual_or_collision_default_class(xml):
+    import xml.etree.ElementTree as ET
+
+    from colorsort.paths import asset_path
+
+    root = ET.parse(asset_path(*xml)).getroot()
+    geoms = root.find("worldbody").iter("geom")
+    assert all(g.get("class") in ("visual", "collision") and g.get("group") is None for g in geoms)
+    model = mujoco.MjModel.from_xml_path(asset_path(*xml))  # MuJoCo itself resolves the classes
+    visual = [g for g in range(model.ngeom) if model.geom(g).name.endswith("_vis")]
+    assert visual and all(model.geom_group[g] == 1 and model.geom_contype[g] == 0 for g in visual)
+
+
+def test_home_keyframe_is_the_pose_episodes_start_in(env):
+    from colorsort.paths import asset_path
+    from colorsort.robots import ROBOTS
+
+    model = mujoco.MjModel.from_xml_path(asset_path("irb140", "robot.xml"))
+    assert np.array_equal(model.key("home").qpos, ROBOTS["IRB140"].home)
+    qadr, _ = arm_joint_ids(env)
+    assert np.array_equal(env.sim.data.qpos[qadr], model.key("home").qpos)

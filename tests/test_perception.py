@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from conftest import make_env
 
-from colorsort.lighting import CONDITIONS, Lighting, LightRig
-from colorsort.perception import UNKNOWN, ColorSensor, PerceptionConfig
-from colorsort.sensor_views import ViewSampler, wrap_quarter_turn
+from colorsort.cell.lighting import CONDITIONS, LightRig
+from colorsort.config import Lighting
+from colorsort.expert.perception import UNKNOWN, ColorSensor, PerceptionConfig
+from colorsort.expert.sensor_views import ViewSampler, wrap_quarter_turn
 
 
 @pytest.fixture(scope="module")
@@ -64,14 +65,14 @@ def test_box_partly_in_view_is_named_and_flagged(sampler, sensor):
 
 def test_empty_belt_has_no_detection(sampler, sensor):
     for box in sampler.env.boxes_in_play():
-        sampler.env._park(box)
+        sampler.env.remove_box(box)
     sampler.env.sim.forward()
     image = np.ascontiguousarray(sampler.env.sim.render(camera_name="sensor", width=128, height=128)[::-1])
     assert sensor.detect(image) == [] and sensor.box_at_sensor(image) is None
 
 
 def test_light_rig_changes_lights_and_restores_them(sampler):
-    model = sampler.env.sim.model._model
+    model = sampler.env.mj_model
     before = model.light_diffuse.copy()
     rig = LightRig(model)
     rig.apply(Lighting(brightness=0.5, tint=(1.0, 0.8, 0.6)))

@@ -4,14 +4,14 @@ import numpy as np
 import pytest
 from conftest import make_env
 
-from colorsort.config import ROBOT_HOMES, ROBOT_JOINT_SPEEDS
-from colorsort.planning import (ANGLE_TOLERANCE, POSITION_TOLERANCE, CupIK, MotionConfig, UnreachableWaypoint,
+from colorsort.robots import ROBOTS
+from colorsort.expert.planning import (ANGLE_TOLERANCE, POSITION_TOLERANCE, CupIK, MotionConfig, UnreachableWaypoint,
                                 Waypoint, cup_down_rotation, plan_motion, site_yaw)
 
 
 def make_ik(robot: str) -> CupIK:
     env = make_env(robot)
-    ik = CupIK(env.robots[0].robot_model.get_model(mode="mujoco"), np.array(ROBOT_HOMES[robot]))
+    ik = CupIK(env.robots[0].robot_model.get_model(mode="mujoco"), np.array(ROBOTS[robot].home))
     env.close()
     return ik
 
@@ -20,7 +20,7 @@ def make_ik(robot: str) -> CupIK:
 def test_ik_reaches_sampled_poses_within_tolerance(robot):
     ik = make_ik(robot)
     rng = np.random.default_rng(0)
-    home = np.array(ROBOT_HOMES[robot])
+    home = np.array(ROBOTS[robot].home)
     home_yaw = site_yaw(ik.cup_pose(home)[1])
     for i in range(15):
         # The cell's workspace: over the belt's pick area and the bins, cup turned up to 90 deg
@@ -39,19 +39,19 @@ def test_ik_reaches_sampled_poses_within_tolerance(robot):
 def test_ik_raises_naming_an_unreachable_waypoint():
     ik = make_ik("IRB140")
     with pytest.raises(UnreachableWaypoint, match="'far shelf'.*misses by"):
-        ik.solve(Waypoint("far shelf", (1.5, 0.0, 0.5)), np.array(ROBOT_HOMES["IRB140"]))
+        ik.solve(Waypoint("far shelf", (1.5, 0.0, 0.5)), np.array(ROBOTS["IRB140"].home))
     with pytest.raises(UnreachableWaypoint, match="'ceiling'"):
-        ik.solve(Waypoint("ceiling", (0.2, 0.0, 1.4)), np.array(ROBOT_HOMES["IRB140"]))
+        ik.solve(Waypoint("ceiling", (0.2, 0.0, 1.4)), np.array(ROBOTS["IRB140"].home))
 
 
 @pytest.mark.parametrize("speed_factor", [1.0, 0.5])
 def test_trajectories_respect_limits_at_every_sample(speed_factor):
     config = MotionConfig(speed_factor=speed_factor, acceleration=12.0, jerk=120.0)
-    vmax = np.array(ROBOT_JOINT_SPEEDS["IRB140"]) * speed_factor
+    vmax = np.array(ROBOTS["IRB140"].joint_speeds) * speed_factor
     rng = np.random.default_rng(1)
     for _ in range(10):
         start, goal = rng.uniform(-1.5, 1.5, (2, 6))
-        traj = plan_motion(start, goal, np.array(ROBOT_JOINT_SPEEDS["IRB140"]), config)
+        traj = plan_motion(start, goal, np.array(ROBOTS["IRB140"].joint_speeds), config)
         times = np.arange(0.0, traj.duration + 1e-9, 1e-3)
         samples = [traj.sample(t) for t in times]
         vel = np.array([s[1] for s in samples])
@@ -66,7 +66,7 @@ def test_trajectories_respect_limits_at_every_sample(speed_factor):
 
 def test_slower_speed_factor_takes_longer():
     start, goal = np.zeros(6), np.full(6, 1.5)
-    v = np.array(ROBOT_JOINT_SPEEDS["IRB140"])
+    v = np.array(ROBOTS["IRB140"].joint_speeds)
     fast = plan_motion(start, goal, v, MotionConfig(speed_factor=1.0)).duration
     slow = plan_motion(start, goal, v, MotionConfig(speed_factor=0.25)).duration
     assert slow > 1.5 * fast

@@ -2,8 +2,9 @@
 
 import numpy as np
 
-from colorsort.replay import MIN_PSNR_DB, main, replay
-from colorsort.video import read_video
+from colorsort.cli.replay import main
+from colorsort.data.replay import MIN_PSNR_DB, replay
+from colorsort.data.video import read_video
 
 
 def test_state_and_action_replay_reproduce_the_episode(tiny_dataset, tmp_path):
@@ -33,7 +34,7 @@ def test_replay_of_a_missing_episode_is_an_error(tiny_dataset, capsys):
 
 
 def test_contact_sheet_picks_first_and_last_frames():
-    from colorsort.video import contact_sheet
+    from colorsort.data.video import contact_sheet
 
     frames = [np.full((30, 40, 3), k, np.uint8) for k in range(50)]
     sheet = contact_sheet(frames, columns=4, rows=2, width=160)

@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 from conftest import make_env
 
-from colorsort.env import rng_from_words, rng_to_words
-from colorsort.expert import SortingExpert
+from colorsort.cell.sim_state import rng_from_words, rng_to_words
+from colorsort.expert.sorter import SortingExpert
 
 
 def record(env, seed: int, steps: int):
     obs = env.reset(seed=seed)
-    expert = SortingExpert(env)
+    expert = SortingExpert.from_env(env)
     expert.reset(obs)
     states, frames, actions = [env.get_sim_state()], [obs["scene_image"]], []
     for _ in range(steps):
@@ -68,3 +68,19 @@ def test_generator_round_trip():
     rng.random(3)
     copy = rng_from_words(rng_to_words(rng))
     assert np.array_equal(copy.random(5), rng.random(5))
+
+
+def test_the_named_layout_addresses_what_each_segment_holds(recorded):
+    env, states, _, _ = recorded
+    layout = env.sim_state_layout
+    s = layout.slices
+    assert layout.size == env.sim_state_size == len(states[0])
+    assert list(s) == ["mujoco", "boxes", "held", "weld", "belt_pass", "belt_running", "next_spawn_time",
+                       "next_serial", "clock", "rng"]
+    last = states[-1]
+    assert last[s["clock"]][0] == pytest.approx(140 * env.control_timestep)
+    assert last[s["mujoco"]][0] == pytest.approx(last[s["clock"]][0])  # MuJoCo's time leads its state
+    boxes = last[s["boxes"]].reshape(-1, 4)
+    in_play = [b for b in env.boxes if b.status.value != "parked"]
+    assert sorted(boxes[boxes[:, 0] >= 0, 3].astype(int)) == sorted(b.serial for b in in_play)
+    assert layout.describe()["segments"]["rng"] == [s["rng"].start, s["rng"].stop]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from helpers import cup_site, move_to, solve_cup_ik, wait_for_box_at_sensor
 
-from colorsort.models.irb140 import JOINT_SPEED_LIMITS_DEG_S
+from colorsort.robots import ROBOTS
 
 
 def box_in_cup_frame(env, box) -> np.ndarray:
@@ -35,7 +35,7 @@ def gripped(env):
 
 def test_cup_lifts_the_box_it_touches(gripped):
     env, box, _, z0 = gripped
-    assert env.seal.held == box.index
+    assert env.plant.seal.held == box.index
     assert env.box_pos(box)[2] > z0 + 0.09  # rose with the cup (0.10 m)
     assert not env.task_info()["box_detected"]
 
@@ -45,7 +45,7 @@ def test_cup_does_not_lift_a_box_2cm_away(env):
     z0 = env.box_pos(box)[2]
     move_to(env, q_at, 1.0, 0.1, settle=0.5)
     move_to(env, q_above, 1.0, 0.5)
-    assert env.seal.held is None
+    assert env.plant.seal.held is None
     assert abs(env.box_pos(box)[2] - z0) < 1e-3
 
 
@@ -54,7 +54,7 @@ def test_box_does_not_slip_through_fastest_motion(gripped):
     rel0 = box_in_cup_frame(env, box)
     # J1, J2, J3 at their datasheet speeds: 90 deg of J1 in the time a smoothstep peaks at 200 deg/s.
     q_far = q_above + np.array([np.pi / 2, 0.35, -0.35, 0, 0, 0])
-    duration = 1.5 * (np.pi / 2) / np.deg2rad(JOINT_SPEED_LIMITS_DEG_S[0])
+    duration = 1.5 * (np.pi / 2) / ROBOTS["IRB140"].joint_speeds[0]
     slips = []
     move_to(env, q_far, 1.0, duration, on_step=lambda e: slips.append(np.linalg.norm(box_in_cup_frame(e, box) - rel0)))
     move_to(env, q_above, 1.0, duration, on_step=lambda e: slips.append(np.linalg.norm(box_in_cup_frame(e, box) - rel0)))
@@ -65,8 +65,8 @@ def test_released_box_falls_within_one_control_step(gripped):
     env, box, q_above, _ = gripped
     rel0 = box_in_cup_frame(env, box)
     env.step(np.concatenate([q_above, [-1.0, -1.0]]))
-    assert env.seal.held is None
-    vz = env.sim.data.qvel[env._box_qvel[box.index] + 2]
+    assert env.plant.seal.held is None
+    vz = env.sim.data.qvel[env.plant.pool.qvel[box.index] + 2]
     assert vz < -0.3  # 1/20 s of free fall: -0.49 m/s
     assert box_in_cup_frame(env, box)[2] > rel0[2] + 0.005
     for _ in range(20):

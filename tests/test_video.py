@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from colorsort.sort import SortConfig, run_sort
-from colorsort.video import VideoWriter, read_video
+from colorsort.benchmark.sorting import SortConfig, run_sort
+from colorsort.data.video import VideoWriter, read_video
 
 
 def test_video_round_trip(tmp_path):

@@ -21,17 +21,17 @@ from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
-from colorsort.config import ROBOT_HOMES
-from colorsort.dataset import ENV_STATE_SIZE, state_size
-from colorsort.env import parse_cameras
-from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, Variant, get_variant
+from colorsort.cell.cameras import parse_cameras
+from colorsort.data.schema import ENV_STATE_SIZE, state_size
+from colorsort.robots import ROBOTS
+from colorsort.variants import Variant, get_variant, gym_ids
 
 NAMESPACE = "colorsort"
 
 
 def variant_of_task(task: str) -> Variant:
     """The benchmark variant behind a Gymnasium id without its namespace, e.g. ``ColorSort-Jitter-v0``."""
-    ids = {DEFAULT_GYM_ID: "default", **{v.gym_id: name for name, v in VARIANTS.items()}}
+    ids = gym_ids()
     gym_id = f"{NAMESPACE}/{task}"
     if gym_id not in ids:
         valid = sorted(i.removeprefix(f"{NAMESPACE}/") for i in ids)
@@ -53,7 +53,7 @@ class ColorSortEnv(EnvConfig):
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        n = len(ROBOT_HOMES[variant_of_task(self.task).robot])
+        n = ROBOTS[variant_of_task(self.task).robot].n_joints
         self.features = {
             ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(n + 2,)),
             "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(state_size(n),)),

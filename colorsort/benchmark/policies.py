@@ -12,7 +12,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from colorsort.gym_env import ColorSortGymEnv
+from colorsort.benchmark.gym_env import ColorSortGymEnv
 
 
 class Policy(Protocol):
@@ -24,16 +24,16 @@ class Policy(Protocol):
 
 
 class ExpertPolicy:
-    """The scripted expert (``colorsort.expert``): it reads the robosuite observation behind ``obs``."""
+    """The scripted expert (``colorsort.expert.sorter``): it reads the robosuite observation behind ``obs``."""
 
     name = "expert"
 
     def reset(self, env: ColorSortGymEnv, seed: int) -> None:
-        from colorsort.expert import SortingExpert
+        from colorsort.expert.sorter import SortingExpert
 
         self.env = env
         if getattr(self, "_for", None) is not env.env:  # the expert's IK and drop points: once per env
-            self.expert, self._for = SortingExpert(env.env), env.env
+            self.expert, self._for = SortingExpert.from_env(env.env), env.env
         self.expert.reset(env.raw_obs)
 
     def act(self, obs: dict[str, Any]) -> np.ndarray:

@@ -19,6 +19,8 @@ import mujoco
 import numpy as np
 import ruckig
 
+from colorsort.config import check_range
+
 GRIP_SITE = "gripper0_right_grip_site"
 POSITION_TOLERANCE = 1e-3  # [m] a waypoint is reached within this
 ANGLE_TOLERANCE = np.deg2rad(1.0)  # [rad]
@@ -39,12 +41,9 @@ class MotionConfig:
     jerk: float = 150.0
 
     def __post_init__(self) -> None:
-        if not 0.0 < self.speed_factor <= 1.0:
-            raise ValueError(f"speed_factor={self.speed_factor} out of range; valid values lie in (0, 1]")
-        if not 0.0 < self.acceleration <= 100.0:
-            raise ValueError(f"acceleration={self.acceleration} out of range; valid values lie in (0, 100] rad/s^2")
-        if not 0.0 < self.jerk <= 5000.0:
-            raise ValueError(f"jerk={self.jerk} out of range; valid values lie in (0, 5000] rad/s^3")
+        check_range("speed_factor", self.speed_factor, 0.0, 1.0, low_inclusive=False)
+        check_range("acceleration", self.acceleration, 0.0, 100.0, low_inclusive=False)  # [rad/s^2]
+        check_range("jerk", self.jerk, 0.0, 5000.0, low_inclusive=False)  # [rad/s^3]
 
 
 @dataclass(frozen=True)

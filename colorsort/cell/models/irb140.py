@@ -11,8 +11,8 @@ import numpy as np
 from robosuite.models.robots.manipulators.manipulator_model import ManipulatorModel
 from robosuite.robots import ROBOT_CLASS_MAPPING, FixedBaseRobot
 
-from colorsort.config import ROBOT_HOMES
 from colorsort.paths import asset_path
+from colorsort.robots import ROBOTS
 
 # Standard DH rows (d [m], a [m], alpha [rad], theta offset [rad]) from the IRB 140 product
 # specification and the ROS-Industrial abb_irb140 description. theta_i = q_i + offset_i;
@@ -27,8 +27,7 @@ DH_TABLE: tuple[tuple[float, float, float, float], ...] = (
 )
 
 JOINT_LIMITS_DEG = np.array([[-180, 180], [-90, 110], [-230, 50], [-200, 200], [-115, 115], [-400, 400]], float)
-JOINT_SPEED_LIMITS_DEG_S = np.array([200, 200, 260, 360, 360, 450], float)
-HOME_QPOS = np.array(ROBOT_HOMES["IRB140"])  # forearm level, flange pointing down
+HOME_QPOS = np.array(ROBOTS["IRB140"].home)  # the MJCF's home keyframe: forearm level, flange pointing down
 
 
 def dh_forward_kinematics(q: np.ndarray) -> np.ndarray:
@@ -85,8 +84,8 @@ class IRB140(ManipulatorModel):
 
     @property
     def joint_velocity_limits(self) -> np.ndarray:
-        """Datasheet maximum joint speeds, shape (6,), in [rad/s]."""
-        return np.deg2rad(JOINT_SPEED_LIMITS_DEG_S)
+        """Datasheet maximum joint speeds, shape (6,), in [rad/s], as the MJCF stores them."""
+        return np.array(ROBOTS["IRB140"].joint_speeds)
 
     @property
     def base_xpos_offset(self) -> dict:

@@ -1,22 +1,12 @@
-"""Run the scripted expert on the cell until N boxes have left the belt, and report per box.
+"""The scripted expert on the cell until N boxes have left the belt, reported per box (``colorsort-sort``).
 
-Example::
-
-    colorsort-sort --preset default --robot IRB140 --boxes 10 --seed 0 \\
-        --video outputs/sort.mp4 --json outputs/sort.json
-
-prints one line per box (colour seen, true colour, bin, cycle time) and a summary (correct,
-misplaced, dropped, rejected, boxes per minute of sim time); ``--video`` films the scene camera
-with an overlay (phase, colour seen, bin counts) and writes a contact sheet of it beside it
-(same name, ``.png``); ``--json`` writes the summary. Exit status 0
-when it ran, whatever the score; 2 for bad arguments.
+``run_sort`` returns a ``SortReport``: counts per outcome, boxes per minute of sim time, the
+peak joint speed against the datasheet, and per box the colour seen, the true colour, the bin and
+the cycle time; with a video path it films the scene camera with an overlay and writes a contact
+sheet beside it.
 """
-
 from __future__ import annotations
 
-import argparse
-import json
-import sys
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -24,11 +14,12 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.config import BIN_COLORS, PRESETS, ROBOT_JOINT_SPEEDS, ROBOTS, make_config, sorting_time_limit
-from colorsort.env import ColorSort
-from colorsort.expert import SortingExpert
-from colorsort.logs import quiet_robosuite_info
-from colorsort.video import VideoWriter, contact_sheet, save_png
+from colorsort.cell.env import ColorSort
+from colorsort.cell.referee import Outcome
+from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sorting_time_limit
+from colorsort.data.video import VideoWriter, contact_sheet, save_png
+from colorsort.expert.sorter import SortingExpert
+from colorsort.robots import get_robot
 
 SHEET_TILE_WIDTH = 320  # [px] frames kept for the contact sheet are shrunk to this width
 
@@ -58,10 +49,8 @@ class SortConfig:
     def __post_init__(self) -> None:
         if self.preset not in PRESETS:
             raise ValueError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
-        if self.robot not in ROBOTS:
-            raise ValueError(f"Unknown robot {self.robot!r}. Valid robots: {list(ROBOTS)}")
-        if not 1 <= self.boxes <= 10_000:
-            raise ValueError(f"boxes={self.boxes} out of range; valid values lie in [1, 10000]")
+        get_robot(self.robot)
+        check_range("boxes", self.boxes, 1, 10_000)
 
 
 @dataclass
@@ -95,11 +84,11 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
     env = ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=bool(config.video), camera_names="scene",
                     camera_heights=h, camera_widths=w, ignore_done=True, seed=config.seed, time_limit=limit)
     obs = env.reset()
-    expert = SortingExpert(env)
+    expert = SortingExpert.from_env(env)
     expert.reset(obs)
     writer = VideoWriter(config.video, fps=env.control_freq) if config.video else None
     report = SortReport()
-    vmax = np.array(ROBOT_JOINT_SPEEDS[config.robot])
+    vmax = np.array(get_robot(config.robot).joint_speeds)
     handled: dict[int, int] = {}  # box serial -> index of the expert's cycle
     reported = 0
     thumbs: list[np.ndarray] = []
@@ -146,8 +135,9 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
     return report
 
 
-def _counter(outcome: str) -> str:
-    return "correct" if outcome == "placed" else outcome
+def _counter(outcome: Outcome) -> str:
+    """The ``SortReport`` field that counts ``outcome``."""
+    return "correct" if outcome is Outcome.PLACED else outcome.value
 
 
 def _box_at_sensor(env: ColorSort) -> int | None:
@@ -175,42 +165,3 @@ def _overlay(frame: np.ndarray, expert: SortingExpert, env: ColorSort) -> np.nda
         cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * scale, (0, 0, 0), 3, cv2.LINE_AA)
         cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * scale, (255, 255, 255), 1, cv2.LINE_AA)
     return out
-
-
-def parse_args(argv: list[str] | None) -> SortConfig:
-    parser = argparse.ArgumentParser(prog="colorsort-sort", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--preset", default="default", choices=sorted(PRESETS), help="task preset")
-    parser.add_argument("--robot", default="IRB140", choices=list(ROBOTS), help="robot arm")
-    parser.add_argument("--boxes", type=int, default=10, help="boxes that must leave the belt")
-    parser.add_argument("--seed", type=int, default=0, help="the env's seed")
-    parser.add_argument("--video", default=None, help="mp4 of the scene camera with an overlay")
-    parser.add_argument("--json", default=None, help="write the summary as JSON here")
-    args = parser.parse_args(argv)
-    try:
-        return SortConfig(preset=args.preset, robot=args.robot, boxes=args.boxes, seed=args.seed,
-                          video=args.video, json=args.json)
-    except ValueError as err:
-        parser.error(str(err))  # exits with status 2
-        raise
-
-
-def main(argv: list[str] | None = None) -> int:
-    quiet_robosuite_info()
-    config = parse_args(argv)
-    report = run_sort(config, progress=True, log=tqdm.write)
-    print(f"{config.robot} on '{config.preset}', seed {config.seed}: {len(report.boxes)} boxes in "
-          f"{report.sim_time_s:.1f} s of sim time")
-    print(f"correct {report.correct}  misplaced {report.misplaced}  dropped {report.dropped}  "
-          f"rejected {report.rejected}  boxes/min {report.boxes_per_minute:.1f}")
-    if config.json:
-        Path(config.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(config.json).write_text(json.dumps(report.to_json(), indent=2))
-        print(f"summary: {config.json}")
-    if config.video:
-        print(f"video: {config.video}  contact sheet: {Path(config.video).with_suffix('.png')}")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

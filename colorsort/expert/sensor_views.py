@@ -11,9 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from colorsort.env import ColorSort
-from colorsort.lighting import Lighting, LightRig, sensor_effects
-from colorsort.perception import CameraModel
+from colorsort.cell.env import ColorSort
+from colorsort.cell.lighting import LightRig, sensor_effects
+from colorsort.config import Lighting
+from colorsort.expert.perception import CameraModel
 
 LAYOUTS: tuple[str, ...] = ("single", "partial", "two_boxes")
 
@@ -55,9 +56,9 @@ class ViewSampler:
         self.env = env
         self.width, self.height = width, height
         self.lateral_jitter = lateral_jitter
-        self.rig = LightRig(env.sim.model._model)
+        self.rig = LightRig(env.mj_model)
         env.sim.forward()
-        self.camera = CameraModel.from_sim(env.sim.model._model, env.sim.data._data, "sensor", width, height)
+        self.camera = CameraModel.from_sim(env.mj_model, env.mj_data, "sensor", width, height)
 
     def sample(self, color: str, lighting: Lighting, layout: str, rng: np.random.Generator,
                other_colors: tuple[str, ...] = ("red", "green", "blue")) -> View:
@@ -66,7 +67,7 @@ class ViewSampler:
             raise ValueError(f"Unknown layout {layout!r}. Valid layouts: {list(LAYOUTS)}")
         env, L = self.env, self.env.layout
         for box in env.boxes_in_play():
-            env._park(box)
+            env.remove_box(box)
         half = L.box_size / 2
         yaw = rng.uniform(-np.pi / 4, np.pi / 4)
         y = L.belt_y + rng.uniform(-self.lateral_jitter, self.lateral_jitter)

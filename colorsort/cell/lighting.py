@@ -1,45 +1,17 @@
 """Lighting and sensor conditions a real cell sees: brightness, light colour, noise and shadows.
 
-``LightRig`` changes the intensity and colour of a MuJoCo model's lights (scene lights and the
-headlight) from the values it was built with; ``sensor_effects`` adds what happens in the camera
-and on the surfaces after rendering (sensor noise, a shadow band). Neither touches the colours of
-boxes or bins.
+A ``Lighting`` (``config.py``) describes one condition. ``LightRig`` changes the intensity and
+colour of a MuJoCo model's lights (scene lights and the headlight) from the values it was built
+with; ``sensor_effects`` adds what happens in the camera and on the surfaces after rendering
+(sensor noise, a shadow band). Neither touches the colours of boxes or bins.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
 
-
-@dataclass(frozen=True)
-class Lighting:
-    """One lighting and sensor condition.
-
-    Attributes:
-        brightness: scale of every light's intensity (1 = as built; 0.5 = half, 2 = double).
-        tint: RGB colour of the light, each in (0, 1]; (1, 1, 1) is white.
-        noise_std: standard deviation of Gaussian sensor noise [8-bit intensity levels].
-        shadow: fraction of light removed inside a shadow band across the image, in [0, 1).
-    """
-
-    brightness: float = 1.0
-    tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    noise_std: float = 0.0
-    shadow: float = 0.0
-
-    def __post_init__(self) -> None:
-        if not 0.05 <= self.brightness <= 5.0:
-            raise ValueError(f"brightness={self.brightness} out of range; valid values lie in [0.05, 5]")
-        if len(self.tint) != 3 or not all(0.0 < t <= 1.0 for t in self.tint):
-            raise ValueError(f"tint={self.tint} must be three values in (0, 1]")
-        if not 0.0 <= self.noise_std <= 50.0:
-            raise ValueError(f"noise_std={self.noise_std} out of range; valid values lie in [0, 50]")
-        if not 0.0 <= self.shadow < 1.0:
-            raise ValueError(f"shadow={self.shadow} out of range; valid values lie in [0, 1)")
-
+from colorsort.config import Lighting
 
 # The conditions the colour sensor is benchmarked under (demos/bench_perception.py).
 CONDITIONS: dict[str, Lighting] = {
@@ -98,3 +70,5 @@ def sensor_effects(image: np.ndarray, lighting: Lighting, rng: np.random.Generat
     if lighting.noise_std > 0.0:
         out += rng.normal(0.0, lighting.noise_std, out.shape)
     return np.clip(np.round(out), 0, 255).astype(np.uint8)
+
+__all__ = ["CONDITIONS", "LightRig", "Lighting", "sensor_effects"]

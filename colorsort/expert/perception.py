@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from colorsort.config import BIN_COLORS, COLORS, CellLayout
+from colorsort.config import BIN_COLORS, COLORS, CellLayout, check_range
 
 UNKNOWN = "unknown"
 
@@ -106,6 +106,9 @@ class PerceptionConfig:
         unknown = [c for c in self.colors if c not in COLORS]
         if unknown:
             raise ValueError(f"Unknown colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
+        check_range("hue_tolerance", self.hue_tolerance, 1.0, 90.0)
+        for name in ("min_saturation", "min_value", "min_area"):
+            check_range(name, getattr(self, name), 0.0, 1.0)
 
 
 @dataclass(frozen=True)

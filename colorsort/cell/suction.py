@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+from robosuite.utils.mjcf_utils import new_element
 
 SEAL_ANGLE_DEG = 15.0  # max angle between the cup axis and a box face normal to seal
 
@@ -85,3 +86,12 @@ class VacuumSeal:
         m.eq_data[eq, 6:10] = rel_quat
         d.eq_active[eq] = 1
         self.held = box
+
+
+def add_welds(task_model, cup_body: str, box_names: list[str]) -> list[str]:
+    """Add one inactive weld equality per box, between ``cup_body`` and the box, to a robosuite task
+    model (``ManipulationTask``); returns their names, in ``box_names``' order."""
+    names = [f"suction_{name}" for name in box_names]
+    for weld, box in zip(names, box_names):
+        task_model.equality.append(new_element("weld", weld, body1=cup_body, body2=box, active="false", solref="0.01 1"))
+    return names

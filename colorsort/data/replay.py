@@ -1,43 +1,28 @@
-"""Replay a recorded episode: re-render it from its states, re-run its actions, and check both.
+"""Replay a recorded episode from its stored states and actions, and check both (``colorsort-replay``).
 
-Example::
-
-    colorsort-replay datasets/colorsort --episode 0 --camera scene --size 480x640 \\
-        --video outputs/replay.mp4 --sheet outputs/replay.png
-
-*State replay* restores each frame's ``sim_state`` and renders ``--camera`` at ``--size`` into
-an mp4 (and a contact sheet PNG). The restored state must give back the recorded
-``observation.state`` and ``observation.environment_state`` exactly, and when that camera was
-recorded at that size, every re-rendered frame is compared with the dataset's decoded frame
-(they differ only by the video codec's loss: LeRobot encodes at crf 30).
-*Action replay* restores the first frame's state and steps the recorded actions: the episode
-must end the same way (every box in the bin of its colour, or let through), and the states it
-passes through are compared with the recorded ones. Exit status 0 when both checks pass,
-1 when one fails, 2 for bad arguments.
+*State replay* (``state_replay``) restores each frame's ``sim_state``, checks that it gives back
+the recorded observations exactly, and re-renders a camera; ``replay`` compares those frames with
+the dataset's decoded video when the camera was recorded at that size. *Action replay*
+(``action_replay``) restores the first state and steps the recorded actions: the episode must be
+judged a success again (``referee.judge``), through the same states.
 """
-
 from __future__ import annotations
 
-import argparse
 import json
-import sys
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.collect import MARKER, parse_image_size
-from colorsort.config import make_config
-from colorsort.dataset import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
-from colorsort.env import CAMERAS, ColorSort
-from colorsort.logs import quiet_robosuite_info
-from colorsort.variants import get_variant
-from colorsort.video import VideoWriter, contact_sheet, save_png
-
-warnings.filterwarnings("ignore", message="Cannot enable progress bars")  # datasets, when HF_DATASETS_DISABLE_PROGRESS_BARS is set
-warnings.filterwarnings("ignore", message="The video decoding and encoding capabilities of torchvision are deprecated")
+from colorsort.cell import sim_state
+from colorsort.cell.cameras import CAMERAS
+from colorsort.cell.env import ColorSort
+from colorsort.cell.referee import judge
+from colorsort.data.config import CollectConfig
+from colorsort.data.schema import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
+from colorsort.data.store import MARKER
+from colorsort.data.video import VideoWriter, contact_sheet, save_png
 
 MIN_PSNR_DB = 24.0  # re-rendered vs decoded frames, worst frame: measured 26.6 dB at 64 px, 29.1 dB at 128 px (h264, crf 30)
 
@@ -68,7 +53,11 @@ def load_episode(root: str | Path, index: int, repo_id: str | None = None) -> Re
     marker_path = root / MARKER
     if not marker_path.is_file():
         raise ValueError(f"{root} is not a ColorSort dataset (no {MARKER})")
-    settings = json.loads(marker_path.read_text())["settings"]
+    marker = json.loads(marker_path.read_text())
+    settings, layout = marker["settings"], marker.get("sim_state")  # no layout: recorded before it was stored
+    if layout is not None and layout["version"] != sim_state.VERSION:
+        raise ValueError(f"{root} stores sim_state version {layout['version']}; this ColorSort reads version "
+                         f"{sim_state.VERSION}: replay it with the ColorSort that recorded it")
     meta = LeRobotDatasetMetadata(repo_id or settings["repo_id"], root=root)
     if not 0 <= index < meta.total_episodes:
         raise ValueError(f"episode {index} does not exist; valid episodes: 0..{meta.total_episodes - 1}")
@@ -108,9 +97,9 @@ def recorded_frames(episode: RecordedEpisode, camera: str) -> np.ndarray:
 
 def make_replay_env(episode: RecordedEpisode) -> ColorSort:
     s = episode.settings
-    variant = s.get("variant")  # datasets recorded before variants were recordable have none
-    config = get_variant(variant).task_config if variant else make_config(s["preset"])
-    return ColorSort(robots=s["robot"], config=config, use_camera_obs=False, has_offscreen_renderer=True,
+    # datasets recorded before variants were recordable have none
+    task = CollectConfig(preset=s["preset"], robot=s["robot"], variant=s.get("variant")).task_config
+    return ColorSort(robots=s["robot"], config=task, use_camera_obs=False, has_offscreen_renderer=True,
                      control_freq=s["fps"], ignore_done=True)
 
 
@@ -130,14 +119,11 @@ class ReplayReport:
     mean_abs_error: float | None  # [0-255 levels]
     outcomes: list[str]  # of the boxes that left the belt in the action replay
     max_state_error: float  # max |replayed - recorded| over the MuJoCo qpos of every frame
+    action_replay_ok: bool  # the action replay's episode succeeded (``referee.judge``)
 
     @property
     def state_replay_ok(self) -> bool:
         return self.state_mismatches == 0 and (self.min_psnr_db is None or self.min_psnr_db >= MIN_PSNR_DB)
-
-    @property
-    def action_replay_ok(self) -> bool:
-        return bool(self.outcomes) and all(o in ("placed", "rejected") for o in self.outcomes)
 
 
 def state_replay(env: ColorSort, episode: RecordedEpisode, camera: str, size: tuple[int, int],
@@ -154,7 +140,7 @@ def state_replay(env: ColorSort, episode: RecordedEpisode, camera: str, size: tu
     try:
         for k, state in enumerate(tqdm(episode.states, desc="rendering", unit="frame", disable=not progress)):
             env.set_sim_state(state)
-            obs = env._get_observations(force_update=True)
+            obs = env.observe()
             mismatches += int(not (np.array_equal(robot_state(env, obs), episode.robot_states[k])
                                    and np.array_equal(box_state(env), episode.box_states[k])))
             frames[k] = env.camera_image(camera, w, h)
@@ -166,9 +152,9 @@ def state_replay(env: ColorSort, episode: RecordedEpisode, camera: str, size: tu
     return frames, mismatches
 
 
-def action_replay(env: ColorSort, episode: RecordedEpisode) -> tuple[list[str], float]:
-    """Step the recorded actions from the first recorded state; returns the boxes' outcomes and
-    the largest deviation of the replayed qpos from the recorded one."""
+def action_replay(env: ColorSort, episode: RecordedEpisode) -> tuple[list[str], bool, float]:
+    """Step the recorded actions from the first recorded state; returns the boxes' outcomes, whether
+    the episode succeeded, and the largest deviation of the replayed qpos from the recorded one."""
     env.reset()
     env.set_sim_state(episode.states[0])
     nq = env.sim.model.nq
@@ -178,7 +164,7 @@ def action_replay(env: ColorSort, episode: RecordedEpisode) -> tuple[list[str], 
             worst = max(worst, float(np.max(np.abs(env.get_sim_state()[1 : 1 + nq] - episode.states[k][1 : 1 + nq]))))
         env.step(action)
     boxes = episode.settings["boxes_per_episode"]
-    return [e.outcome for e in env.events[:boxes]], worst
+    return [str(e.outcome) for e in env.events[:boxes]], judge(env.events, boxes).success, worst
 
 
 def replay(root: str | Path, index: int, camera: str = "scene", size: tuple[int, int] | None = None,
@@ -199,47 +185,7 @@ def replay(root: str | Path, index: int, camera: str = "scene", size: tuple[int,
             mae = float(np.mean(np.abs(frames.astype(np.int16) - reference.astype(np.int16))))
         if sheet:
             save_png(sheet, contact_sheet(list(frames), fps=episode.fps))
-        outcomes, state_error = action_replay(env, episode)
+        outcomes, ok, state_error = action_replay(env, episode)
     finally:
         env.close()
-    return ReplayReport(len(frames), video, sheet, mismatches, min_psnr, mae, outcomes, state_error)
-
-
-def main(argv: list[str] | None = None) -> int:
-    quiet_robosuite_info()
-    parser = argparse.ArgumentParser(prog="colorsort-replay", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("dataset", help="dataset directory (colorsort-collect's --out)")
-    parser.add_argument("--episode", type=int, default=0, help="episode index")
-    parser.add_argument("--camera", default="scene", choices=list(CAMERAS), help="camera to render")
-    parser.add_argument("--size", default=None, help="HxW or a square size [px]; default: the recorded size")
-    parser.add_argument("--video", default=None, help="mp4 path (default outputs/replay_ep<I>_<camera>.mp4)")
-    parser.add_argument("--sheet", default=None, help="contact sheet PNG path (default: the video's, .png)")
-    args = parser.parse_args(argv)
-    try:
-        size = parse_image_size(args.size) if args.size else None
-    except ValueError as err:
-        parser.error(str(err))
-    video = args.video or f"outputs/replay_ep{args.episode}_{args.camera}.mp4"
-    sheet = args.sheet or str(Path(video).with_suffix(".png"))
-    try:
-        report = replay(args.dataset, args.episode, args.camera, size, video, sheet)
-    except ValueError as err:
-        print(f"colorsort-replay: error: {err}", file=sys.stderr)
-        return 2
-    print(f"episode {args.episode}: {report.frames} frames -> {report.video}, contact sheet {report.sheet}")
-    print(f"state replay: {report.frames - report.state_mismatches}/{report.frames} restored states give back "
-          "the recorded observation.state and environment_state exactly")
-    if report.min_psnr_db is None:
-        print(f"state replay: {args.camera} at this size is not in the dataset, no frames to compare")
-    else:
-        print(f"state replay: re-rendered vs recorded frames: min PSNR {report.min_psnr_db:.1f} dB "
-              f"(pass >= {MIN_PSNR_DB:.0f}), mean abs error {report.mean_abs_error:.2f} levels")
-    print(f"state replay -> {'ok' if report.state_replay_ok else 'FAILED'}")
-    print(f"action replay: outcomes {report.outcomes}, max qpos deviation {report.max_state_error:.2e} "
-          f"-> {'ok' if report.action_replay_ok else 'FAILED'}")
-    return 0 if report.state_replay_ok and report.action_replay_ok else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+    return ReplayReport(len(frames), video, sheet, mismatches, min_psnr, mae, outcomes, state_error, ok)

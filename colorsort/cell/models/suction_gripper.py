@@ -3,7 +3,7 @@
 Suction is MuJoCo physics in two parts. The ``adhesion`` actuator on the cup body adds an
 attracting normal force to the contacts the cup pad already has, so the cup only acts on what
 it touches (nothing is grasped through the air). Once the pad lies flat on a box face the
-vacuum seals: ``colorsort.suction.VacuumSeal`` switches on a weld equality at the pose the two
+vacuum seals: ``colorsort.cell.suction.VacuumSeal`` switches on a weld equality at the pose the two
 bodies have (no teleporting, no reparenting), and switches it off the physics step after the
 command drops, so a released box falls at once.
 """

@@ -23,11 +23,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from colorsort.config import ROBOT_HOMES
-from colorsort.dataset import ENV_STATE_SIZE, box_state, robot_state, state_size
-from colorsort.env import CAMERAS, ColorSort, action_bounds
-from colorsort.lighting import LightRig
-from colorsort.variants import Variant, get_variant, is_distractor
+from colorsort.cell.cameras import check_cameras
+from colorsort.cell.env import ColorSort
+from colorsort.cell.referee import Outcome, judge
+from colorsort.config import is_distractor
+from colorsort.data.schema import ENV_STATE_SIZE, box_state, robot_state, state_size
+from colorsort.robots import ROBOTS
+from colorsort.variants import Variant, get_variant, gym_ids
 
 
 class ColorSortGymEnv(gym.Env):
@@ -56,9 +58,7 @@ class ColorSortGymEnv(gym.Env):
         self.variant = get_variant(variant) if isinstance(variant, str) else variant
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}; valid modes: [None, 'rgb_array']")
-        unknown = [c for c in cameras if c not in CAMERAS]
-        if unknown:
-            raise ValueError(f"Unknown camera(s) {unknown}. Valid cameras: {list(CAMERAS)}")
+        check_cameras(cameras)
         if episode_length is not None and episode_length < 1:
             raise ValueError(f"episode_length={episode_length}: give at least 1 step, or None for the variant's limit")
         self.render_mode = render_mode
@@ -69,16 +69,16 @@ class ColorSortGymEnv(gym.Env):
         # LeRobot's evaluator reads ``_max_episode_steps`` (Gymnasium's TimeLimit attribute) through env.call.
         self._max_episode_steps = episode_length or int(np.ceil(self.variant.time_limit * fps))
         self.metadata = {**self.metadata, "render_fps": fps}
-        n_joints = len(ROBOT_HOMES[self.variant.robot])
+        robot = ROBOTS[self.variant.robot]
         obs_spaces = {
-            "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(n_joints),), np.float32),
+            "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(robot.n_joints),), np.float32),
             "environment_state": spaces.Box(-np.inf, np.inf, (ENV_STATE_SIZE,), np.float32),
         }
         if self.cameras:
             obs_spaces = {"pixels": spaces.Dict({c: spaces.Box(0, 255, (h, w, 3), np.uint8) for c in self.cameras}),
                           **obs_spaces}
         self.observation_space = spaces.Dict(obs_spaces)
-        low, high = action_bounds(self.variant.robot)
+        low, high = robot.action_bounds()
         self.action_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
         # What LeRobot's evaluator reads from every env (env.call): the task's name and its instruction
         # for language-conditioned policies.
@@ -86,7 +86,6 @@ class ColorSortGymEnv(gym.Env):
         self.task_description = (f"Sort the next {self.variant.boxes} boxes from the conveyor into the bins "
                                  "of their colours.")
         self._env: ColorSort | None = None
-        self.lights: LightRig | None = None
         self.raw_obs: dict[str, Any] = {}  # the robosuite observation behind the last one returned
         self.steps = 0
 
@@ -105,7 +104,6 @@ class ColorSortGymEnv(gym.Env):
                                   has_offscreen_renderer=bool(self.cameras) or self.render_mode is not None,
                                   camera_names=list(self.cameras) or "scene", camera_heights=h, camera_widths=w,
                                   control_freq=self.fps, ignore_done=True)
-            self.lights = LightRig(self._env.mj_model)
         return self._env
 
     # ------------------------------------------------------------------ gym API
@@ -113,10 +111,7 @@ class ColorSortGymEnv(gym.Env):
         super().reset(seed=seed)
         episode_seed = int(self.np_random.integers(2**31)) if seed is None else int(seed)
         env = self.env
-        self.raw_obs = env.reset(seed=episode_seed)
-        self.lights.apply(self.variant.lighting(env.rng))  # lights only: box and bin colours stay
-        if self.variant.random_lights and self.cameras:
-            self.raw_obs = env.observe()  # re-render under the new lights
+        self.raw_obs = env.reset(seed=episode_seed, lighting=self.variant.lighting)  # lights only: colours stay
         self.steps = 0
         return self._observation(), self._info()
 
@@ -152,29 +147,26 @@ class ColorSortGymEnv(gym.Env):
 
     def _info(self) -> dict[str, Any]:
         events = self.env.events[: self.variant.boxes]
-        wrong = [e for e in events if e.outcome in ("misplaced", "dropped")]
-        done = len(events) >= self.variant.boxes
+        verdict = judge(events, self.variant.boxes)
+        count = {o: sum(e.outcome is o for e in events) for o in Outcome}
         return {
-            "is_success": done and not wrong,
-            "failed": bool(wrong),
-            "correct": sum(e.outcome == "placed" for e in events),
-            "misplaced": sum(e.outcome == "misplaced" for e in events),
-            "dropped": sum(e.outcome == "dropped" for e in events),
-            "let_through": sum(e.outcome == "rejected" and is_distractor(e.color) for e in events),
+            "is_success": verdict.success,
+            "failed": verdict.failed,
+            "correct": count[Outcome.PLACED],
+            "misplaced": count[Outcome.MISPLACED],
+            "dropped": count[Outcome.DROPPED],
+            "let_through": count[Outcome.REJECTED],
             "distractors": sum(is_distractor(e.color) for e in events),
             "boxes_done": len(events),
-            "sorted_times": [e.time for e in events if e.outcome == "placed"
-                             or (e.outcome == "rejected" and is_distractor(e.color))],  # [s] boxes handled right
+            "sorted_times": [e.time for e in events if e.outcome.handled_right],  # [s] boxes handled right
             "sim_time": self.env.cur_time,
         }
 
 
 def register_envs() -> None:
     """Register ``colorsort/ColorSort-v0`` and every variant's id with Gymnasium (idempotent)."""
-    from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
-
-    ids = {DEFAULT_GYM_ID: "default", **{v.gym_id: name for name, v in VARIANTS.items()}}
+    ids = gym_ids()
     for gym_id, name in ids.items():
         if gym_id not in gym.registry:
-            gym.register(id=gym_id, entry_point="colorsort.gym_env:ColorSortGymEnv", kwargs={"variant": name},
+            gym.register(id=gym_id, entry_point="colorsort.benchmark.gym_env:ColorSortGymEnv", kwargs={"variant": name},
                          disable_env_checker=True)

@@ -15,6 +15,7 @@ key                               dtype      shape       what
 ``action``                        float32    (n + 2,)    exactly what the env consumed: joint targets [rad],
                                                          suction, belt pass (both in [-1, 1], > 0 is on)
 ``sim_state``                     float64    (S,)        ``ColorSort.get_sim_state()``: replays the frame
+                                                         (layout: ``cell/sim_state.py``)
 ================================  =========  ==========  =================================================
 
 ``sim_state`` does not start with ``observation.``, so LeRobot policies do not take it as an
@@ -29,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from colorsort.config import BIN_COLORS, COLORS
-from colorsort.env import ColorSort
+from colorsort.cell.env import ColorSort
 
 STATE = "observation.state"
 ENV_STATE = "observation.environment_state"
@@ -70,7 +71,7 @@ def env_state_names() -> list[str]:
                                                "box.present"])
 
 
-ENV_STATE_SIZE = len(env_state_names())  # = len(ColorSort.next_box_state())
+ENV_STATE_SIZE = len(env_state_names())  # = len(Plant.next_box_state())
 
 
 def action_names(env: ColorSort) -> list[str]:
@@ -99,14 +100,14 @@ def features(env: ColorSort, cameras: tuple[str, ...], image_size: tuple[int, in
 
 def robot_state(env: ColorSort, obs: dict[str, Any]) -> np.ndarray:
     """``observation.state`` from an observation of ``env`` (see the module docstring)."""
-    flags = [env.seal.commanded, env.seal.held is not None, env.box_detected, env.belt_running]
+    flags = [env.plant.seal.commanded, env.suction_sealed, env.box_detected, env.belt_running]
     return np.concatenate([obs["robot0_joint_pos"], obs["robot0_joint_vel"], obs["robot0_eef_pos"],
                            obs["robot0_eef_quat"], np.asarray(flags, float)]).astype(np.float32)
 
 
 def box_state(env: ColorSort) -> np.ndarray:
     """``observation.environment_state``: the in-play box with the lowest serial, or zeros."""
-    return env.next_box_state()
+    return env.plant.next_box_state()
 
 
 def frame(env: ColorSort, obs: dict[str, Any], action: np.ndarray, cameras: tuple[str, ...], task: str) -> dict[str, Any]:

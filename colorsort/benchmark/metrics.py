@@ -1,0 +1,80 @@
+"""Benchmark metrics: the success rate with its 95% Wilson interval and the sorting figures.
+
+Success: every box of the episode where it belongs (``referee.judge``). Boxes placed correctly,
+misplaced, dropped; distractors (boxes with no bin) let through; boxes per minute (boxes handled
+right, placed in their bin or let through, per minute of sim time); mean cycle time (sim time
+between consecutive boxes handled right).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class EvalReport:
+    policy: str
+    variant: str
+    episodes: int = 0
+    successes: int = 0
+    success_rate: float = 0.0
+    success_ci95: tuple[float, float] = (0.0, 0.0)
+    correct: int = 0
+    misplaced: int = 0
+    dropped: int = 0
+    distractors: int = 0
+    distractors_let_through: int = 0
+    boxes_per_minute: float = 0.0
+    mean_cycle_time_s: float | None = None
+    sim_time_s: float = 0.0
+    seeds: list[int] = field(default_factory=list)
+    per_episode: list[dict] = field(default_factory=list)
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """95% Wilson score interval of a success rate (sensible at 0 and 1, unlike the normal approximation)."""
+    if n == 0:
+        return 0.0, 1.0
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def aggregate(policy: str, variant: str, results: list[dict]) -> EvalReport:
+    """The report over per-episode results (``evaluate``'s per-episode dicts, in seed order)."""
+    report = EvalReport(policy=policy, variant=variant, seeds=[r["seed"] for r in results])
+    cycles: list[float] = []
+    handled = 0
+    for r in results:
+        report.episodes += 1
+        report.successes += int(r["success"])
+        for key in ("correct", "misplaced", "dropped", "distractors"):
+            setattr(report, key, getattr(report, key) + r[key])
+        report.distractors_let_through += r["let_through"]
+        report.sim_time_s += r["sim_time"]
+        handled += len(r["sorted_times"])
+        cycles += list(np.diff(r["sorted_times"]))
+        report.per_episode.append({k: v for k, v in r.items() if k != "sorted_times"})
+    report.success_rate = report.successes / report.episodes
+    report.success_ci95 = wilson_interval(report.successes, report.episodes)
+    report.boxes_per_minute = 60.0 * handled / report.sim_time_s if report.sim_time_s > 0 else 0.0
+    report.mean_cycle_time_s = float(np.mean(cycles)) if cycles else None
+    return report
+
+
+def format_report(r: EvalReport) -> str:
+    lo, hi = r.success_ci95
+    cycle = f"{r.mean_cycle_time_s:.2f} s" if r.mean_cycle_time_s is not None else "-"
+    rows = [
+        ("policy", r.policy), ("variant", r.variant), ("episodes", str(r.episodes)),
+        ("success rate", f"{100 * r.success_rate:.1f}%  (95% CI {100 * lo:.1f}-{100 * hi:.1f}%)"),
+        ("boxes placed correctly", str(r.correct)), ("misplaced", str(r.misplaced)), ("dropped", str(r.dropped)),
+        ("distractors let through", f"{r.distractors_let_through}/{r.distractors}"),
+        ("boxes per minute", f"{r.boxes_per_minute:.1f}"), ("mean cycle time", cycle),
+        ("seeds", f"{r.seeds[0]}..{r.seeds[-1]}" if r.seeds else "-"),
+    ]
+    return "\n".join(f"{k:<24} {v}" for k, v in rows)

@@ -1,0 +1,1 @@
+"""The physics: the robosuite task and the cell's parts (box pool, conveyor, referee, seal, cameras, lights)."""

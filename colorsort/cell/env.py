@@ -1,0 +1,397 @@
+"""The ColorSort task: a robot sorts coloured boxes off a conveyor into the bins of their colour.
+
+Spec sheet
+----------
+Action (8,) for the IRB 140: absolute joint position targets for the arm's six joints [rad],
+    suction in [-1, 1] (> 0 is on), then belt pass in [-1, 1] (> 0 runs the belt even while
+    the ray sensor sees a box: how a box with no bin is let through). Other
+    ``controller_configs`` change the arm part as in robosuite; Panda has 7 joints, so 9.
+    NaN or infinite elements raise ``ValueError`` (naming them) before anything moves. Finite
+    values outside ``action_spec`` are clipped by robosuite's controller to its input range
+    ([-7, 7] rad); a target beyond a joint's limit drives the joint to its limit and no further.
+    Suction and belt pass act on their sign only: any positive value is on.
+Observations: robosuite proprioception (``robot0_joint_pos``, ``robot0_eef_pos``, ...);
+    ``box_detected``, ``belt_running`` and ``suction_sealed`` (the cup's vacuum switch) as 1.0
+    or 0.0; with ``use_camera_obs`` the images
+    ``scene_image``, ``sensor_image``, ``wrist_image`` (H, W, 3) uint8, right side up.
+Belt: carries boxes toward the arm at ``belt_speed`` [m/s]; stops while the ray is blocked,
+    unless the belt-pass command is on.
+Spawner: a box from the pool every ``spawn_period`` [s] at the belt's upstream end, colour
+    drawn from ``box_colors`` by the env's seeded generator, optional lateral and yaw jitter;
+    waits while the pool is empty or the spawn point is occupied.
+Events: ``env.events`` lists every box that left play (``BoxEvent``: time, serial, colour,
+    outcome, bin), for harnesses that score per box.
+Bins: a box resting inside a bin's walls is placed (its colour's bin) or misplaced; at
+    ``bin_capacity`` boxes the bin is emptied (its boxes go back to the pool) and logged.
+Outcomes: ``referee.Outcome`` (placed, misplaced, dropped, rejected).
+Reward: +1 per box placed in the bin of its colour, -1 per box misplaced or dropped, times
+    ``reward_scale``; ``reward_shaping=True`` adds a dense staged reward (reach the box, seal
+    it, carry it toward its bin, hold or drop it over the bin: see ``staged_rewards``).
+Success: ``boxes_to_sort`` boxes placed correctly, none misplaced or dropped.
+Termination: success, failure (a box misplaced or dropped), or ``time_limit`` (the horizon).
+Randomisation: only through ``seed`` (the env's own ``numpy.random.Generator``).
+State: ``get_sim_state()`` returns everything that makes an instant replayable (MuJoCo state,
+    boxes, seal, belt, clock, generator) as one float64 vector (layout: ``sim_state.py``);
+    ``set_sim_state`` restores it, after which stepping the same actions retraces the episode bit
+    for bit.
+
+This class is robosuite glue; the cell itself is ``plant.py`` (pool, belt, spawner, seal, referee).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import mujoco
+import numpy as np
+from robosuite import macros
+from robosuite.controllers import load_composite_controller_config
+from robosuite.environments.manipulation.manipulation_env import ManipulationEnv
+from robosuite.models.tasks import ManipulationTask
+from robosuite.utils.observables import Observable, sensor
+
+from colorsort.cell import cameras, sim_state
+from colorsort.cell.boxes import Box
+from colorsort.cell.models.arena import ConveyorArena
+from colorsort.cell.plant import Plant
+from colorsort.cell.referee import BoxEvent, Tally
+from colorsort.cell.rendering import check_gl
+from colorsort.cell.sim_state import SimStateLayout
+from colorsort.cell.suction import add_welds
+from colorsort.config import CellLayout, Lighting, TaskConfig, make_config
+from colorsort.paths import asset_path
+from colorsort.robots import GRIPPERS, ROBOTS, RobotSpec
+
+
+class ColorSort(ManipulationEnv):
+    """Conveyor colour sorting with a suction cup; see the module docstring for the spec sheet.
+
+    Args:
+        robots: "IRB140", "Panda" or "UR5e".
+        preset: name of a ``TaskConfig`` preset ("default", "seed").
+        config: a full ``TaskConfig``; overrides ``preset``.
+        layout: the cell's geometry.
+        camera_names: any of "scene", "sensor", "wrist".
+        control_freq: policy rate [Hz].
+        servo_freq: rate [Hz] at which the arm controller recomputes joint torques, held in
+            between (a drive's servo period); a divisor of the 500 Hz physics rate.
+        use_object_obs: add the ``next_box`` observation (``Plant.next_box_state``), part of robosuite's
+            ``object-state`` (what ``GymWrapper`` feeds a policy by default).
+        reward_scale: multiplies every reward (None: unscaled), as in robosuite's tasks.
+        reward_shaping: add the dense staged reward (``staged_rewards``) to the sparse one.
+        **overrides: ``TaskConfig`` fields, e.g. ``belt_speed=0.1``.
+        Other arguments are robosuite's.
+    """
+
+    def __init__(
+        self, robots: str | list[str] = "IRB140", preset: str = "default", config: TaskConfig | None = None,
+        layout: CellLayout | None = None, env_configuration: str = "default",
+        controller_configs: dict | None = None, gripper_types: str = "SuctionGripper",
+        initialization_noise: dict | None = None, use_camera_obs: bool = False, use_object_obs: bool = True,
+        has_renderer: bool = False, has_offscreen_renderer: bool = True, render_camera: str = "scene",
+        render_collision_mesh: bool = False, render_visual_mesh: bool = True, render_gpu_device_id: int = -1,
+        control_freq: float = 20, servo_freq: float = 100, lite_physics: bool = True, horizon: int | None = None,
+        ignore_done: bool = False, hard_reset: bool = False, camera_names: str | list[str] = cameras.CAMERAS,
+        camera_heights: int | list[int] = 128, camera_widths: int | list[int] = 128,
+        camera_depths: bool | list[bool] = False, camera_segmentations: Any = None, renderer: str = "mjviewer",
+        renderer_config: dict | None = None, seed: int | None = None, reward_scale: float | None = 1.0,
+        reward_shaping: bool = False, **overrides: Any,
+    ):
+        robot_list = [robots] if isinstance(robots, str) else list(robots)
+        if len(robot_list) != 1 or robot_list[0] not in ROBOTS:
+            raise ValueError(f"ColorSort takes one robot; got {robots!r}. Valid robots: {list(ROBOTS)}")
+        if gripper_types not in GRIPPERS:
+            raise ValueError(f"Unknown gripper {gripper_types!r}. Valid grippers: {list(GRIPPERS)}")
+        if gripper_types == "default" and robot_list[0] != "IRB140":
+            raise ValueError(f"{robot_list[0]}'s default gripper cannot pick 0.1 m boxes; use 'SuctionGripper'")
+        self.config = config if config is not None else make_config(preset, **overrides)
+        if config is not None and overrides:
+            raise ValueError("Pass either config or field overrides, not both")
+        self.layout = layout or CellLayout()
+        self.robot_spec: RobotSpec = ROBOTS[robot_list[0]]
+        cams = [camera_names] if isinstance(camera_names, str) else list(camera_names)
+        cameras.check_cameras(cams)
+        if controller_configs is None:
+            controller_configs = load_composite_controller_config(
+                controller=asset_path("controllers", "joint_position_absolute.json")
+            )
+        if has_offscreen_renderer:
+            check_gl()
+        if horizon is None:
+            horizon = int(np.ceil(self.config.time_limit * control_freq))
+
+        physics_hz = 1.0 / macros.SIMULATION_TIMESTEP
+        if servo_freq <= 0 or abs(physics_hz / servo_freq - round(physics_hz / servo_freq)) > 1e-9:
+            raise ValueError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, e.g. 100, 250, 500")
+        self._servo_period = int(round(physics_hz / servo_freq))  # physics steps per torque update
+        self._substep = 0
+        self._obs_dt = 0.0
+        self._cameras = cameras.CameraRenderer()
+        self._arm_action = np.zeros(0)
+        self._step_reward = 0.0
+        self.reward_scale = reward_scale
+        self.use_object_obs = bool(use_object_obs)
+        self.reward_shaping = bool(reward_shaping)
+
+        super().__init__(
+            robots=robot_list, env_configuration=env_configuration, controller_configs=controller_configs,
+            base_types="NullMount", gripper_types=gripper_types, initialization_noise=initialization_noise,
+            use_camera_obs=use_camera_obs, has_renderer=has_renderer, has_offscreen_renderer=has_offscreen_renderer,
+            render_camera=cameras.mjcf_name(render_camera), render_collision_mesh=render_collision_mesh,
+            render_visual_mesh=render_visual_mesh, render_gpu_device_id=render_gpu_device_id,
+            control_freq=control_freq, lite_physics=lite_physics, horizon=horizon, ignore_done=ignore_done,
+            hard_reset=hard_reset, camera_names=[cameras.mjcf_name(c) for c in cams], camera_heights=camera_heights,
+            camera_widths=camera_widths, camera_depths=camera_depths, camera_segmentations=camera_segmentations,
+            renderer=renderer, renderer_config=renderer_config, seed=seed,
+        )
+        # robosuite hides its visualisation sites (the gripper's green grip line) in reset(), not when
+        # it builds the env: an env rendered before its first reset (a replay) would show them.
+        self.visualize(vis_settings={vis: False for vis in self._visualizations})
+
+    def _load_model(self) -> None:
+        super()._load_model()
+        robot_model = self.robots[0].robot_model
+        robot_model.set_base_xpos(self.robot_spec.base)
+        self.robots[0].init_qpos = np.array(self.robot_spec.home)
+        arena = ConveyorArena(self.layout, self.config.pool_size, self.config.box_mass)
+        arena.set_origin([0, 0, 0])
+        self.model = ManipulationTask(mujoco_arena=arena, mujoco_robots=[robot_model])
+        add_welds(self.model, self.robots[0].gripper["right"].correct_naming("cup"), arena.box_names)
+        # robosuite's merge drops <custom>; keep the robot's (joint speed limits live there).
+        custom = robot_model.root.find("custom")
+        if custom is not None:
+            self.model.root.append(custom)
+        cameras.tune_visual(self.model.root)
+
+    def _setup_references(self) -> None:
+        super()._setup_references()  # robosuite calls this on every reset: the plant lives as long as its model
+        if getattr(self, "plant", None) is None or self.plant.model is not self.mj_model:
+            gripper = self.robots[0].gripper["right"]
+            self.plant = Plant(self.mj_model, self.mj_data, self.layout, self.config, cup=gripper.correct_naming("cup"),
+                               pad=gripper.correct_naming("cup_pad"), suction=gripper.correct_naming("suction"))
+
+    @property
+    def mj_model(self) -> mujoco.MjModel:
+        """The compiled MuJoCo model (robosuite's ``sim.model`` wraps it)."""
+        return self.sim.model._model
+
+    @property
+    def mj_data(self) -> mujoco.MjData:
+        """The MuJoCo data (robosuite's ``sim.data`` wraps it)."""
+        return self.sim.data._data
+
+    @property
+    def boxes(self) -> list[Box]:
+        """Every pooled box, in pool order."""
+        return self.plant.pool.boxes
+
+    def boxes_in_play(self) -> list[Box]:
+        """Boxes on the belt, in the cup or in the air."""
+        return self.plant.pool.in_play()
+
+    def box_pos(self, box: Box) -> np.ndarray:
+        """World position of a box's centre [m]."""
+        return self.plant.pool.pos(box)
+
+    def put_box(self, color: str, x: float, y: float, yaw: float = 0.0) -> Box:
+        """Take a box from the pool and set it down on the belt, centred at (x, y) [m], turned ``yaw`` [rad]
+        (for tests and benchmarks; the spawner does this in play). ValueError: unknown colour;
+        RuntimeError: the pool is empty."""
+        box = self.plant.put_box(color, x, y, yaw)
+        self.sim.forward()
+        return box
+
+    def remove_box(self, box: Box) -> None:
+        """Return a box to the pool at once (the cup lets go of it first); no outcome is recorded."""
+        self.plant.remove_box(box)
+
+    @property
+    def box_detected(self) -> bool:
+        """The ray sensor sees a box."""
+        return self.plant.belt.box_detected
+
+    @property
+    def belt_running(self) -> bool:
+        return self.plant.belt.running
+
+    @property
+    def suction_sealed(self) -> bool:
+        """The cup's vacuum switch: a box is sealed to the cup."""
+        return self.plant.seal.held is not None
+
+    @property
+    def events(self) -> list[BoxEvent]:
+        """Every box that left play this episode, in order (``referee.BoxEvent``)."""
+        return self.plant.referee.events
+
+    @property
+    def tally(self) -> Tally:
+        """This episode's counters (``referee.Tally``)."""
+        return self.plant.referee.tally
+
+    @property
+    def render_seconds(self) -> float:
+        """[s] wall time spent rendering camera images, for benchmarks."""
+        return self._cameras.seconds
+
+    def observe(self) -> dict[str, Any]:
+        """Sample every observation now (re-rendering the cameras), e.g. after lights changed."""
+        return self._get_observations(force_update=True)
+
+    def action_names(self) -> list[str]:
+        """One name per action element: the arm joints' targets, then ``suction``, ``belt_pass``."""
+        prefix = self.robots[0].robot_model.naming_prefix
+        return [f"{j.removeprefix(prefix)}.target" for j in self.robots[0].robot_joints] + ["suction", "belt_pass"]
+
+    def _create_camera_sensors(self, cam_name, cam_w, cam_h, cam_d, cam_segs, modality="image"):
+        """Camera sensors named by their ColorSort alias, images flipped right side up for OpenCV."""
+        if cam_segs is not None:
+            raise ValueError("ColorSort cameras do not provide segmentation")
+        return cameras.camera_sensors(self.camera_image, cam_name, cam_w, cam_h, cam_d, modality)
+
+    def camera_image(self, camera: str, width: int, height: int, depth: bool = False):
+        """Render camera ``camera`` ("scene", "sensor", "wrist") now: (H, W, 3) uint8 RGB, right side up.
+
+        With ``depth``, also the depth image (H, W, 1) [m]. Time spent adds to ``render_seconds``.
+        """
+        return self._cameras.image(self.sim, camera, width, height, depth)
+
+    def _setup_observables(self) -> dict[str, Observable]:
+        observables = super()._setup_observables()
+
+        flags = {"box_detected": lambda: self.box_detected, "belt_running": lambda: self.belt_running,
+                 "suction_sealed": lambda: self.suction_sealed}
+        sensors = [sensor(modality="object")(_named(name, lambda cache, f=f: np.array([float(f())])))
+                   for name, f in flags.items()]
+        if self.use_object_obs:
+            sensors.append(sensor(modality="object")(_named("next_box", lambda cache: self.plant.next_box_state())))
+        for s in sensors:
+            observables[s.__name__] = Observable(name=s.__name__, sensor=s, sampling_rate=self.control_freq)
+        return observables
+
+    def reset(self, seed: int | None = None, lighting: Callable[[np.random.Generator], Lighting] | None = None):
+        """Reset the episode; ``seed`` reseeds the env's generator first; ``lighting`` then draws this
+        episode's lights from it (``Variant.lighting``), and the cameras see them."""
+        if seed is not None:
+            self.seed = seed
+            self.rng = np.random.default_rng(seed)
+        obs = super().reset()
+        if lighting is not None:
+            before = self.plant.lighting
+            self.plant.set_lighting(lighting(self.rng))
+            if self.use_camera_obs and self.plant.lighting != before:
+                obs = self.observe()  # re-render under the new lights
+        return obs
+
+    def _reset_internal(self) -> None:
+        super()._reset_internal()
+        if self.has_offscreen_renderer:
+            self._cameras.hide_rangefinder(self.sim)
+        self.plant.reset(self.cur_time, self.rng)
+        self._step_reward = 0.0
+        self.sim.forward()
+
+    @property
+    def action_dim(self) -> int:
+        """The robot's action (arm controller, then suction) plus the belt-pass command."""
+        return self._action_dim + 1
+
+    @property
+    def action_spec(self) -> tuple[np.ndarray, np.ndarray]:
+        low, high = super().action_spec
+        return np.append(low, -1.0), np.append(high, 1.0)
+
+    def _pre_action(self, action, policy_step=False):
+        if policy_step:
+            action = np.asarray(action, dtype=float)
+            if action.shape != (self.action_dim,):
+                raise ValueError(f"Expected an action of shape ({self.action_dim},), got {action.shape}")
+            bad = np.flatnonzero(~np.isfinite(action))
+            if bad.size:
+                names = self.action_names()
+                raise ValueError("Action elements must be finite; got "
+                                 + ", ".join(f"{names[i]} (index {i}) = {action[i]}" for i in bad))
+            self._substep = 0
+            self._arm_action = action[:-1]
+            self.plant.belt.belt_pass = bool(action[-1] > 0.0)
+        if self._substep % self._servo_period == 0:
+            self.robots[0].control(self._arm_action, policy_step=policy_step)  # robosuite's controller writes ctrl
+        self._substep += 1
+        self.plant.physics_step()
+
+    def _update_observables(self, force: bool = False) -> None:
+        """Sample every observable once per policy step, at its very end (see ``_post_action``).
+
+        robosuite calls this after each physics step and samples at the start of each policy
+        period, from kinematics one physics step old. ColorSort samples once, after the step's
+        boxes were spawned or parked and the kinematics recomputed, so that an observation shows
+        exactly the state ``get_sim_state`` returns (and a replay of that state re-renders it).
+        Observable delays and corrupters are not used by the task.
+        """
+        self._obs_dt += self.model_timestep
+        if force:
+            self._sample_observables()
+
+    def _sample_observables(self) -> None:
+        for observable in self._observables.values():
+            observable.update(timestep=self._obs_dt, obs_cache=self._obs_cache, force=True)
+        self._obs_dt = 0.0
+
+    def _post_action(self, action):
+        self._step_reward = self.plant.control_step(self.cur_time, self.rng)
+        mujoco.mj_forward(self.mj_model, self.mj_data)  # mj_step leaves kinematics a substep old
+        self._sample_observables()
+        reward, done, info = super()._post_action(action)
+        info.update(self.task_info())
+        if not self.ignore_done and (info["is_success"] or self.tally.failed):
+            self.done = done = True
+        return reward, done, info
+
+    def reward(self, action=None) -> float:
+        """This step's reward, times ``reward_scale``.
+
+        Sparse (the default): +1 per box placed in its colour's bin this step, -1 per box
+        misplaced or dropped. With ``reward_shaping``, plus every step
+        ``(boxes placed correctly so far + staged_rewards()["progress"]) / boxes_to_sort``:
+        in [0, 1] until ``boxes_to_sort`` boxes are placed, rising through the stages of the
+        box being sorted, and never falling when a box is placed (its share moves to the count).
+        """
+        reward = self._step_reward
+        if self.reward_shaping:
+            reward += (sum(self.tally.placed.values()) + self.staged_rewards()["progress"]) / self.config.boxes_to_sort
+        return reward * self.reward_scale if self.reward_scale is not None else reward
+
+    def staged_rewards(self) -> dict[str, float]:
+        """Dense progress on the next box that has a bin, by stage (``Referee.staged_rewards``)."""
+        return self.plant.staged_rewards()
+
+    def _check_success(self) -> bool:
+        return self.tally.success(self.config.boxes_to_sort)
+
+    def task_info(self) -> dict[str, Any]:
+        """The task's counters, as reported in ``info`` by ``step``."""
+        return self.plant.info(self.config.boxes_to_sort)
+
+    @property
+    def sim_state_layout(self) -> SimStateLayout:
+        """Where each part of ``get_sim_state()``'s vector lies (``sim_state.py``)."""
+        return SimStateLayout.of(self.mj_model, len(self.boxes))
+
+    @property
+    def sim_state_size(self) -> int:
+        """Length of ``get_sim_state()``'s vector."""
+        return self.sim_state_layout.size
+
+    def get_sim_state(self) -> np.ndarray:
+        """Everything that makes this instant replayable, as one float64 vector (``sim_state.py``)."""
+        return sim_state.capture(self)
+
+    def set_sim_state(self, state: np.ndarray) -> None:
+        """Restore an instant saved by ``get_sim_state`` (same robot, layout and pool size); the episode's
+        counters and events are not part of the state: they keep counting from their current values."""
+        sim_state.restore(self, state)
+
+
+def _named(name: str, fn: Callable) -> Callable:
+    fn.__name__ = name  # robosuite names an observable after its sensor function
+    return fn

@@ -1,0 +1,177 @@
+"""The sim-state codec: everything that makes an instant replayable, as one float64 vector.
+
+The vector's layout is written once, in ``SEGMENTS``, and versioned: a change to it bumps
+``VERSION``, which the collector stores beside each dataset (``meta/colorsort.json``).
+
+====================  ===================  ==========================================================
+segment               length               what
+====================  ===================  ==========================================================
+``mujoco``            ``mj_stateSize``     MuJoCo's state (``MJ_STATE_SPEC``): time, qpos, qvel,
+                                           controls, active equalities, mocap, the solver's warm start
+``boxes``             4 x pool size        per pooled box: colour (index in ``config.COLORS``, -1 while
+                                           parked), status (index in ``BoxStatus``), bin (index in
+                                           ``BIN_COLORS`` or -1), serial
+``held``              1                    the sealed box's pool index, or -1
+``weld``              ``mjNEQDATA``        the seal's weld ``eq_data`` (zeros when none)
+``belt_pass``         1                    the belt-pass command, 0 or 1
+``belt_running``      1                    0 or 1
+``next_spawn_time``   1                    [s]
+``next_serial``       1
+``clock``             1                    the env's clock [s]
+``rng``               10                   the env's PCG64 generator, in 32-bit words
+====================  ===================  ==========================================================
+
+Applied forces (``qfrc_applied``, ``xfrc_applied``) are left out: ColorSort never sets them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from colorsort.cell.boxes import BoxStatus
+from colorsort.config import BIN_COLORS, COLORS
+
+if TYPE_CHECKING:
+    from colorsort.cell.env import ColorSort
+
+VERSION = 1
+# The parts of MuJoCo's state that ColorSort changes while it runs.
+MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
+                 | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
+                 | mujoco.mjtState.mjSTATE_WARMSTART)
+RNG_STATE_SIZE = 10  # a PCG64 generator's state and increment (4 x 32 bits each), then its uint32 buffer
+SCALARS = ("held", "belt_pass", "belt_running", "next_spawn_time", "next_serial", "clock")
+
+
+def rng_to_words(rng: np.random.Generator) -> np.ndarray:
+    """A PCG64 generator's full state as 32-bit words (exact in float64)."""
+    st = rng.bit_generator.state
+    if st["bit_generator"] != "PCG64":
+        raise ValueError(f"Only PCG64 generators can be saved, not {st['bit_generator']}")
+    words = [(v >> (32 * k)) & 0xFFFFFFFF for v in (st["state"]["state"], st["state"]["inc"]) for k in range(4)]
+    return np.array(words + [st["has_uint32"], st["uinteger"]], dtype=np.float64)
+
+
+def rng_from_words(words: np.ndarray) -> np.random.Generator:
+    """The generator ``rng_to_words`` saved."""
+    w = [int(x) for x in words]
+    state, inc = (sum(w[i + k] << (32 * k) for k in range(4)) for i in (0, 4))
+    gen = np.random.Generator(np.random.PCG64())
+    gen.bit_generator.state = {"bit_generator": "PCG64", "state": {"state": state, "inc": inc},
+                               "has_uint32": w[8], "uinteger": w[9]}
+    return gen
+
+
+@dataclass(frozen=True)
+class SimStateLayout:
+    """Where each segment lies in the vector, for a model with ``mujoco_size`` state numbers and
+    ``pool_size`` boxes."""
+
+    mujoco_size: int
+    pool_size: int
+
+    @classmethod
+    def of(cls, model: mujoco.MjModel, pool_size: int) -> SimStateLayout:
+        return cls(mujoco.mj_stateSize(model, MJ_STATE_SPEC), pool_size)
+
+    @property
+    def lengths(self) -> dict[str, int]:
+        """Segment name -> length, in order (the table in the module docstring)."""
+        return {"mujoco": self.mujoco_size, "boxes": 4 * self.pool_size, "held": 1, "weld": mujoco.mjNEQDATA,
+                **{name: 1 for name in SCALARS[1:]}, "rng": RNG_STATE_SIZE}
+
+    @property
+    def slices(self) -> dict[str, slice]:
+        out, start = {}, 0
+        for name, n in self.lengths.items():
+            out[name] = slice(start, start + n)
+            start += n
+        return out
+
+    @property
+    def size(self) -> int:
+        return sum(self.lengths.values())
+
+    def describe(self) -> dict:
+        """The layout as JSON-ready data: version and [start, stop) per segment."""
+        return {"version": VERSION, "segments": {k: [s.start, s.stop] for k, s in self.slices.items()}}
+
+
+@dataclass
+class CellState:
+    """One instant of the cell, segment by segment (see the module docstring)."""
+
+    mujoco: np.ndarray  # (mujoco_size,)
+    boxes: np.ndarray  # (pool_size, 4) int: colour, status, bin, serial
+    held: int
+    weld: np.ndarray  # (mjNEQDATA,)
+    belt_pass: bool
+    belt_running: bool
+    next_spawn_time: float  # [s]
+    next_serial: int
+    clock: float  # [s]
+    rng: np.ndarray  # (RNG_STATE_SIZE,) words
+
+    def pack(self, layout: SimStateLayout) -> np.ndarray:
+        out = np.empty(layout.size, np.float64)
+        for name, s in layout.slices.items():
+            out[s] = np.ravel(np.asarray(getattr(self, name), dtype=np.float64))
+        return out
+
+    @classmethod
+    def unpack(cls, vector: np.ndarray, layout: SimStateLayout) -> CellState:
+        vector = np.asarray(vector, dtype=np.float64)
+        if vector.shape != (layout.size,):
+            raise ValueError(f"Expected a state of shape ({layout.size},), got {vector.shape}: "
+                             "was it saved with another robot or pool size?")
+        s = layout.slices
+        scalar = {name: vector[s[name]][0] for name in SCALARS}
+        return cls(mujoco=vector[s["mujoco"]], boxes=vector[s["boxes"]].reshape(-1, 4).astype(int),
+                   held=int(scalar["held"]), weld=vector[s["weld"]], belt_pass=bool(scalar["belt_pass"]),
+                   belt_running=bool(scalar["belt_running"]), next_spawn_time=float(scalar["next_spawn_time"]),
+                   next_serial=int(scalar["next_serial"]), clock=float(scalar["clock"]), rng=vector[s["rng"]])
+
+
+def capture(env: ColorSort) -> np.ndarray:
+    """``env``'s instant as a vector (``ColorSort.get_sim_state``)."""
+    m, d = env.mj_model, env.mj_data
+    layout = env.sim_state_layout
+    mj = np.empty(layout.mujoco_size)
+    mujoco.mj_getState(m, d, mj, MJ_STATE_SPEC)
+    colors, statuses = list(COLORS), list(BoxStatus)
+    boxes = [(colors.index(b.color) if b.status is not BoxStatus.PARKED else -1, statuses.index(b.status),
+              BIN_COLORS.index(b.bin) if b.bin is not None else -1, b.serial) for b in env.boxes]
+    held = env.plant.seal.held if env.plant.seal.held is not None else -1
+    weld = m.eq_data[env.plant.seal.welds[held]] if held >= 0 else np.zeros(mujoco.mjNEQDATA)
+    state = CellState(mj, np.array(boxes), held, weld, env.plant.belt.belt_pass, env.plant.belt.running, env.plant.spawner.next_time,
+                      env.plant.spawner.next_serial, env.cur_time, rng_to_words(env.rng))
+    return state.pack(layout)
+
+
+def restore(env: ColorSort, vector: np.ndarray) -> None:
+    """Set ``env`` to the instant ``capture`` saved (``ColorSort.set_sim_state``)."""
+    s = CellState.unpack(vector, env.sim_state_layout)
+    m, d = env.mj_model, env.mj_data
+    mujoco.mj_setState(m, d, s.mujoco, MJ_STATE_SPEC)
+    colors, statuses = list(COLORS), list(BoxStatus)
+    for box, (color, status, bin_index, serial) in zip(env.boxes, s.boxes):
+        box.status, box.serial = statuses[status], int(serial)
+        box.bin = BIN_COLORS[bin_index] if bin_index >= 0 else None
+        if color >= 0:  # a parked box's colour is whatever it last had: out of sight, not part of the state
+            env.plant.pool.paint(box, colors[color])
+        env.plant.pool.restore(box, box.status)
+    env.plant.seal.held = s.held if s.held >= 0 else None
+    if s.held >= 0:
+        m.eq_data[env.plant.seal.welds[s.held]] = s.weld
+    env.plant.belt.belt_pass, env.plant.belt.running = s.belt_pass, s.belt_running
+    env.plant.spawner.next_time, env.plant.spawner.next_serial, env.cur_time = s.next_spawn_time, s.next_serial, s.clock
+    env.rng = rng_from_words(s.rng)
+    env.timestep = int(round(env.cur_time / env.control_timestep))
+    mujoco.mj_forward(m, d)
+    env.plant.belt.sense()
+    for controller in env.robots[0].part_controllers.values():
+        controller.update(force=True)  # robosuite caches joint states and the mass matrix between steps

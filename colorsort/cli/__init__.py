@@ -1,0 +1,1 @@
+"""The console scripts: argument parsing and printing only; the work is done by the layers below."""

@@ -1,0 +1,71 @@
+"""What the collector records and where: ``CollectConfig``, validated on construction."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from colorsort.cell.cameras import CAMERAS
+from colorsort.config import PRESETS, TaskConfig, check_range, make_config
+from colorsort.robots import get_robot
+from colorsort.variants import get_variant
+
+FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
+VCODECS = ("h264", "libsvtav1", "hevc")
+
+
+@dataclass(frozen=True)
+class CollectConfig:
+    """What to record and where."""
+
+    episodes: int = 10  # episodes to try; episode i runs with env seed `seed + i`
+    boxes_per_episode: int = 1  # an episode ends when this many boxes have left the belt
+    preset: str = "default"  # task preset (config.PRESETS)
+    robot: str = "IRB140"  # "IRB140", "Panda" or "UR5e"
+    variant: str | None = None  # record a benchmark variant's task (its preset, overrides, robot and lights)
+    seed: int = 0  # base seed
+    out: str = "datasets/colorsort"  # dataset directory (LeRobot's `root`)
+    repo_id: str = "local/colorsort"  # LeRobot repo id, for loading: LeRobotDataset(repo_id, root=out)
+    cameras: tuple[str, ...] = ("scene", "wrist")  # stored as observation.images.<camera>; () records state only
+    image_size: tuple[int, int] = (128, 128)  # (height, width) of every camera [px]
+    fps: int = 20  # frames per second = the env's control rate [Hz]
+    workers: int = 1  # processes recording shards side by side
+    vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
+    resume: bool = False  # add the episodes still missing to an existing dataset
+    overwrite: bool = False  # replace an existing dataset
+
+    def __post_init__(self) -> None:
+        if self.variant is not None:
+            v = get_variant(self.variant)
+            if (self.preset, self.robot) != (v.preset, v.robot):
+                raise ValueError(f"variant {self.variant!r} sets the preset ({v.preset!r}) and robot ({v.robot!r}); "
+                                 f"got preset={self.preset!r}, robot={self.robot!r}: give the variant alone")
+        if self.preset not in PRESETS:
+            raise ValueError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
+        get_robot(self.robot)
+        bad = [c for c in self.cameras if c not in CAMERAS]
+        if bad or len(set(self.cameras)) != len(self.cameras):
+            raise ValueError(f"cameras={self.cameras}: give distinct names from {list(CAMERAS)}, or none")
+        if self.fps not in FPS_CHOICES:
+            raise ValueError(f"fps={self.fps} not supported. Valid values: {list(FPS_CHOICES)}")
+        if self.vcodec not in VCODECS:
+            raise ValueError(f"Unknown vcodec {self.vcodec!r}. Valid codecs: {list(VCODECS)}")
+        check_range("episodes", self.episodes, 1, 1_000_000)
+        check_range("boxes_per_episode", self.boxes_per_episode, 1, 100)
+        check_range("workers", self.workers, 1, 64)
+        if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
+            raise ValueError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
+        if self.seed < 0:
+            raise ValueError(f"seed={self.seed} must be >= 0")
+        if self.resume and self.overwrite:
+            raise ValueError("Pass --resume or --overwrite, not both")
+
+    def settings(self) -> dict:
+        """The settings every episode of one dataset must share (checked on --resume)."""
+        keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps", "vcodec")
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
+
+    @property
+    def task_config(self) -> TaskConfig:
+        """The task the episodes run: the variant's, or the preset's."""
+        return get_variant(self.variant).task_config if self.variant else make_config(self.preset)
+

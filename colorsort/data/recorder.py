@@ -1,0 +1,140 @@
+"""The recording loop: the expert runs episodes by seed and each kept one is saved as a LeRobot episode.
+
+``record_shard`` records a list of episode numbers into one new dataset and always finalizes it,
+so every episode it saved is loadable whatever stops it. Where its wall time goes is timed per
+stage (``ShardReport.seconds``) for ``demos/bench_collect.py``.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from colorsort.cell.env import ColorSort
+from colorsort.cell.referee import judge
+from colorsort.config import sorting_time_limit
+from colorsort.data.config import CollectConfig
+from colorsort.data.schema import features, frame, task_text
+from colorsort.expert.sorter import SortingExpert
+from colorsort.variants import get_variant
+
+STAGES = ("setup", "expert", "physics and control", "rendering", "frames to lerobot", "episode saving")
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    index: int  # episode number i: seed = base seed + i
+    seed: int
+    kept: bool
+    reason: str  # "ok", or why it was not kept: "misplaced", "dropped", "timeout" (``referee.judge``)
+    frames: int
+    sim_time_s: float  # [s]
+
+
+@dataclass
+class ShardReport:
+    """What one recorder did, and where its wall time went [s]."""
+
+    root: str
+    kept: list[int] = field(default_factory=list)  # episode numbers saved, in order
+    interrupted: bool = False
+    error: str | None = None
+    seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(STAGES, 0.0))
+    sim_state: dict | None = None  # the sim-state layout of its env (``SimStateLayout.describe``)
+
+
+def episode_time_limit(config: CollectConfig) -> float:
+    """[s] sim time after which an episode counts as failed."""
+    return sorting_time_limit(config.boxes_per_episode, config.task_config)
+
+
+def make_recording_env(config: CollectConfig) -> ColorSort:
+    """The env the collector records from: the dataset's cameras, every step (none for a state-only dataset;
+    the expert still renders its own sensor photo)."""
+    h, w = config.image_size
+    return ColorSort(robots=config.robot, config=config.task_config, use_camera_obs=bool(config.cameras),
+                     camera_names=list(config.cameras) or "scene",
+                     camera_heights=h, camera_widths=w, control_freq=config.fps, ignore_done=True, seed=config.seed)
+
+
+class _Stopped(Exception):
+    """Recording was asked to stop."""
+
+
+def record_shard(config: CollectConfig, indices: list[int], root: Path,
+                 report: Callable[[EpisodeResult], None], stop: Callable[[], bool] = lambda: False) -> ShardReport:
+    """Record episodes ``indices`` into a new dataset at ``root``; always finalizes what it saved.
+
+    Ctrl-C (KeyboardInterrupt) or ``stop()`` turning true abandons the episode under way and
+    returns with ``interrupted`` set; any other error is returned in ``error``.
+    """
+    import av
+    from lerobot.configs.video import RGBEncoderConfig
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's notes on every file it writes (lerobot restores
+    # FFmpeg's own log callback, which prints at this level)
+    out = ShardReport(str(root))
+    sec = out.seconds
+    t0 = time.perf_counter()
+    env = make_recording_env(config)
+    expert = SortingExpert.from_env(env)
+    lighting = get_variant(config.variant).lighting if config.variant else None
+    out.sim_state = env.sim_state_layout.describe()
+    dataset = LeRobotDataset.create(
+        config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
+        robot_type=config.robot, use_videos=True, video_backend="pyav", rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec),
+        streaming_encoding=True, encoder_queue_maxsize=10_000, encoder_threads=1 if config.workers > 1 else None,
+    )
+    sec["setup"] += time.perf_counter() - t0
+    limit = episode_time_limit(config)
+    k = config.boxes_per_episode
+    try:
+        for index in indices:
+            seed = config.seed + index
+            obs = env.reset(seed=seed, lighting=lighting)  # as the benchmark's gym env: same seed, same episode
+            expert.reset(obs)
+            first = min(env.boxes_in_play(), key=lambda b: b.serial)
+            task = task_text(first.color, k)
+            frames = 0
+            while len(env.events) < k and env.cur_time < limit:
+                if stop():
+                    raise _Stopped
+                t = time.perf_counter()
+                action = expert.act(obs).astype(np.float32)  # stored as float32: the env consumes exactly that
+                t_act = time.perf_counter()
+                dataset.add_frame(frame(env, obs, action, config.cameras, task))
+                t_add = time.perf_counter()
+                render_before = env.render_seconds
+                obs, _, _, _ = env.step(action)
+                t_step = time.perf_counter()
+                rendered = env.render_seconds - render_before
+                sec["expert"] += t_act - t
+                sec["frames to lerobot"] += t_add - t_act
+                sec["rendering"] += rendered
+                sec["physics and control"] += t_step - t_add - rendered
+                frames += 1
+            reason = judge(env.events, k).reason
+            t = time.perf_counter()
+            if reason == "ok":
+                dataset.save_episode()
+                out.kept.append(index)
+            else:
+                dataset.clear_episode_buffer()
+            sec["episode saving"] += time.perf_counter() - t
+            report(EpisodeResult(index, seed, reason == "ok", reason, frames, frames / config.fps))
+    except (KeyboardInterrupt, _Stopped):
+        out.interrupted = True
+    except Exception:  # noqa: BLE001 - reported to the caller, finished episodes are still saved
+        out.error = traceback.format_exc()
+    finally:
+        if dataset.has_pending_frames():
+            dataset.clear_episode_buffer()  # the episode under way is not saved
+        dataset.finalize()
+        env.close()
+    return out

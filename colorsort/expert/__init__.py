@@ -1,0 +1,1 @@
+"""Decides: the colour sensor (OpenCV), motion planning (mink, ruckig) and the scripted expert."""

@@ -1,0 +1,64 @@
+"""What the expert knows about the cell before it starts: a calibration, as a real integrator measures it.
+
+The sensor camera's model (intrinsics and pose), the arm's kinematics for IK, its home pose and
+joint speeds, the position controller's gains, the cell's layout and the control period. It is read
+once from a ``ColorSort`` env through public handles; the expert never touches the env's state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Callable
+
+import mujoco
+import numpy as np
+
+from colorsort.config import CellLayout
+from colorsort.expert.perception import CameraModel
+
+if TYPE_CHECKING:
+    from colorsort.cell.env import ColorSort
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The cell as the expert knows it.
+
+    Attributes:
+        camera: the colour sensor's camera model, at the size its images come in.
+        kinematics: the arm and its cup, alone (the model mink solves IK on).
+        home: joint angles [rad] of the arm's home pose.
+        max_velocity: the maker's joint speeds [rad/s].
+        lead: [s] per joint, the position controller's kd / kp: it lags its target by that times
+            the speed, so the expert leads the target by as much (velocity feed-forward).
+        layout: the cell's geometry [m].
+        control_period: [s] between actions.
+    """
+
+    camera: CameraModel
+    kinematics: mujoco.MjModel
+    home: np.ndarray
+    max_velocity: np.ndarray
+    lead: np.ndarray
+    layout: CellLayout
+    control_period: float
+
+    @classmethod
+    def from_env(cls, env: ColorSort, photo_size: tuple[int, int]) -> Calibration:
+        """Read from ``env`` (with its sensor camera at ``photo_size`` (width, height) [px])."""
+        robot = env.robots[0]
+        controller = robot.part_controllers["right"]
+        camera = CameraModel.from_sim(env.mj_model, env.mj_data, "sensor", *photo_size)
+        return cls(camera, robot.robot_model.get_model(mode="mujoco"), np.asarray(env.robot_spec.home, float),
+                   np.array(env.robot_spec.joint_speeds), np.asarray(controller.kd, float) / np.asarray(controller.kp, float),
+                   env.layout, env.control_timestep)
+
+
+def sensor_source(env: ColorSort, size: int) -> tuple[tuple[int, int], Callable[[dict], np.ndarray]]:
+    """Where the expert's colour images come from: the env's ``sensor_image`` observation if it renders
+    one every step, else a photo the expert triggers (``size`` x ``size`` px) when the ray fires.
+    Returns the images' (width, height) [px] and a function of the observation that gives the image."""
+    if env.use_camera_obs and "sensor" in env.camera_names:
+        i = env.camera_names.index("sensor")
+        return (env.camera_widths[i], env.camera_heights[i]), lambda obs: np.asarray(obs["sensor_image"])
+    return (size, size), lambda obs: env.camera_image("sensor", size, size)

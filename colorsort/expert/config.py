@@ -1,0 +1,62 @@
+"""The scripted expert's settings: heights, offsets, tolerances and timings, in one frozen dataclass."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from colorsort.config import check_range
+from colorsort.expert.perception import PerceptionConfig
+from colorsort.expert.planning import MotionConfig
+
+
+@dataclass(frozen=True)
+class ExpertConfig:
+    """Settings of the scripted expert. Heights and offsets come from the cell's geometry (``CellLayout``).
+
+    Attributes:
+        motion: joint speed, acceleration and jerk limits.
+        perception: the colour sensor's thresholds.
+        carry_z: [m] cup height while carrying: the box bottom clears the belt rails by 8 cm.
+        approach_gap: [m] cup above the box's top face before the final descent.
+        press: [m] the cup's target lies this far below the top face, so the pad seats firmly.
+        drop_clearance: [m] box bottom above a bin's rim at release.
+        wait_offset_y: [m] the wait pose lies this far from the belt centre, toward the bins (out of view).
+        drop_slots: release points per bin, used in turn so that boxes do not pile up.
+        wait_tolerance: [rad] max joint error that counts as arrived at the wait pose.
+        approach_tolerance: [rad] the same over the box and on it (the cup must sit flat).
+        lift_tolerance: [rad] the same at the top of the lift.
+        drop_tolerance: [rad] the same over a bin.
+        grip_timeout: [s] time to wait for a seal before backing off and looking again.
+        release_time: [s] time after the seal is gone before moving on (the box falls clear).
+        sensor_image_size: [px] side of the triggered photo, when the env's observations do not
+            include ``sensor_image``.
+    """
+
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    perception: PerceptionConfig = field(default_factory=PerceptionConfig)
+    carry_z: float = 0.60
+    approach_gap: float = 0.04
+    press: float = 0.003
+    drop_clearance: float = 0.12
+    wait_offset_y: float = 0.205
+    drop_slots: int = 4
+    wait_tolerance: float = 0.02
+    approach_tolerance: float = 0.01
+    lift_tolerance: float = 0.05
+    drop_tolerance: float = 0.03
+    grip_timeout: float = 1.0
+    release_time: float = 0.15
+    sensor_image_size: int = 128
+
+    def __post_init__(self) -> None:
+        check_range("carry_z", self.carry_z, 0.4, 1.2)
+        check_range("approach_gap", self.approach_gap, 0.0, 0.2)
+        check_range("press", self.press, 0.0, 0.02)
+        check_range("drop_clearance", self.drop_clearance, 0.0, 0.5)
+        check_range("wait_offset_y", self.wait_offset_y, 0.0, 0.5)
+        check_range("drop_slots", self.drop_slots, 1, 12)
+        for name in ("wait_tolerance", "approach_tolerance", "lift_tolerance", "drop_tolerance"):
+            check_range(name, getattr(self, name), 0.001, 0.5)
+        check_range("grip_timeout", self.grip_timeout, 0.05, 10.0)
+        check_range("release_time", self.release_time, 0.0, 5.0)
+        check_range("sensor_image_size", self.sensor_image_size, 16, 1024)

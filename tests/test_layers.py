@@ -1,0 +1,97 @@
+"""The package's architecture, held: layers import only downward, modules stay small, importing changes nothing."""
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "colorsort"
+# Lowest first; a module may import its own layer and those before it.
+LAYERS = ("base", "cell", "expert", "data", "benchmark", "cli")
+MAX_LINES = 400
+
+
+def layer_of(module: str) -> int:
+    parts = module.split(".")
+    return LAYERS.index(parts[1]) if len(parts) > 1 and parts[1] in LAYERS else 0
+
+
+def modules() -> list[tuple[str, Path]]:
+    out = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE.parent).with_suffix("")
+        out.append((".".join(rel.parts).removesuffix(".__init__"), path))
+    return out
+
+
+def runtime_imports(path: Path) -> set[str]:
+    """Every colorsort module ``path`` imports when it runs (``if TYPE_CHECKING:`` blocks aside)."""
+    tree = ast.parse(path.read_text())
+    skip = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+            for n in ast.walk(node)}
+    found = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("colorsort"):
+            found.add(node.module)
+            found.update(f"{node.module}.{a.name}" for a in node.names)  # `from colorsort.cell import cameras`
+        elif isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.startswith("colorsort"))
+    return found
+
+
+def test_every_import_points_down_the_layers():
+    known = {name for name, _ in modules()}
+    upward = []
+    for name, path in modules():
+        if name == "colorsort":
+            continue  # the package's __init__ registers the task and the Gymnasium ids: it sits on top
+        for target in runtime_imports(path):
+            if target in known and layer_of(target) > layer_of(name):
+                upward.append(f"{name} ({LAYERS[layer_of(name)]}) imports {target} ({LAYERS[layer_of(target)]})")
+    assert not upward, "imports that run back up a layer:\n" + "\n".join(upward)
+
+
+def test_the_layers_are_the_packages_folders():
+    folders = {p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").is_file()}
+    assert folders == set(LAYERS[1:])
+
+
+@pytest.mark.parametrize("name,path", modules(), ids=[n for n, _ in modules()])
+def test_no_module_is_over_400_lines(name, path):
+    assert len(path.read_text().splitlines()) <= MAX_LINES
+
+
+def third_party_imports() -> set[str]:
+    """The other packages colorsort's modules import at module level."""
+    found = set()
+    for _, path in modules():
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.Import):
+                found.update(a.name for a in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                found.add(node.module)
+    return {m for m in found if not m.startswith(("colorsort", "__future__"))}
+
+
+def test_importing_any_module_changes_no_environment_variable_or_warning_filter():
+    names = [n for n, _ in modules() if n != "colorsort"]
+    script = (
+        "import os, sys, json, warnings, importlib\n"
+        "import colorsort\n"  # the package itself defaults MUJOCO_GL before robosuite loads a renderer
+        f"for name in {sorted(third_party_imports())!r}:\n"  # what other packages do at import is theirs
+        "    importlib.import_module(name)\n"
+        "env, filters = dict(os.environ), list(warnings.filters)\n"
+        f"for name in {names!r}:\n"
+        "    importlib.import_module(name)\n"
+        "changed = sorted(k for k in set(env) | set(os.environ) if env.get(k) != os.environ.get(k))\n"
+        "print(json.dumps({'env': changed, 'filters': len(warnings.filters) - len(filters)}))\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result == {"env": [], "filters": 0}
