@@ -43,6 +43,8 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_perception.py --views 1000
 	$(VENV)/bin/python demos/bench_sort.py --preset default --seeds 10 --boxes 20
 	$(VENV)/bin/python demos/bench_sort.py --preset seed --seeds 3 --boxes 4
+	$(VENV)/bin/python demos/bench_tracking.py --seeds 10 --boxes 20
+	$(VENV)/bin/python demos/bench_seal.py
 	$(VENV)/bin/python demos/bench_collect.py --episodes 48
 	$(VENV)/bin/python demos/bench_eval.py
 	$(VENV)/bin/python demos/bench_suite.py --episodes 10

@@ -72,6 +72,7 @@ class TaskConfig:
     yaw_jitter: float = 0.0  # [deg] max |yaw| of a new box
     box_mass: float = 0.5  # [kg]
     time_limit: float = 60.0  # [s] sim time per episode (sets robosuite's horizon)
+    tracking: bool = False  # the belt never stops: the ray only reports that a box passed (conveyor tracking)
 
     def __post_init__(self) -> None:
         check_range("belt_speed", self.belt_speed, 0.0, 0.5, low_inclusive=False)
@@ -113,7 +114,18 @@ PRESETS: dict[str, TaskConfig] = {
     "seed": TaskConfig(belt_speed=0.05, spawn_period=30.0, bin_capacity=2, boxes_to_sort=3, time_limit=150.0),
     # Four times the original's belt speed, a box every 4 s: room for 15 boxes a minute.
     "default": TaskConfig(),
+    # Conveyor tracking: the belt never stops; the arm meets each box on the move. 24 boxes a minute.
+    "tracking": TaskConfig(spawn_period=2.5, tracking=True),
+    "tracking-fast": TaskConfig(belt_speed=0.3, spawn_period=2.0, tracking=True),  # 30 boxes a minute
 }
+
+TRACKING_SENSOR_X = 0.80  # [m] where the ray and the colour camera stand on a tracking belt
+
+
+def layout_for(task: TaskConfig) -> CellLayout:
+    """The cell a task runs in. On a tracking belt the ray and the colour camera stand upstream, at
+    ``TRACKING_SENSOR_X``, beyond the arm's reach: the camera sees each box before the arm can meet it."""
+    return CellLayout(sensor_x=TRACKING_SENSOR_X) if task.tracking else CellLayout()
 
 
 def is_distractor(color: str) -> bool:

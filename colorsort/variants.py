@@ -86,6 +86,11 @@ VARIANTS: dict[str, Variant] = {v.name: v for v in (
     Variant("lighting", 0, "every episode under other lights: brightness x0.5-1.6, warm to cold", random_lights=True),
     Variant("distractors", 0, "yellow and purple boxes too: no bin, must be let through", boxes=4,
             overrides=(("box_colors", tuple(COLORS)),)),
+    Variant("tracking", 0, "a belt that never stops: 0.2 m/s, a box every 2.5 s, picked on the move",
+            preset="tracking", boxes=5),
+    Variant("tracking-fast", 0, "a belt that never stops: 0.3 m/s, a box every 2 s", preset="tracking-fast", boxes=5),
+    Variant("tracking-jitter", 0, "the tracking belt with boxes off-centre by up to 5 cm and turned up to 45 deg",
+            preset="tracking", boxes=5, overrides=(("lateral_jitter", 0.05), ("yaw_jitter", 45.0))),
     Variant("robots-panda", 0, "the default task with a Franka Panda and the suction cup", robot="Panda"),
     Variant("robots-ur5e", 0, "the default task with a UR5e and the suction cup", robot="UR5e"),
 )}

@@ -1,6 +1,6 @@
 """Baselines: the scripted expert and a random policy on every benchmark variant.
 
-    python demos/bench_suite.py [--episodes 10] [--workers 2] [--image-size 64]
+    python demos/bench_suite.py [--episodes 10] [--workers 2] [--image-size 64] [--variants tracking,tracking-fast]
 
 Runs ``colorsort.benchmark.evaluate.evaluate`` for each (policy, variant) pair on the variant's fixed
 evaluation seeds, the pairs spread over worker processes, and prints one Markdown table row per
@@ -17,7 +17,8 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-from colorsort.benchmark.evaluate import EvalReport, evaluate  # noqa: E402
+from colorsort.benchmark.evaluate import evaluate  # noqa: E402
+from colorsort.benchmark.metrics import EvalReport  # noqa: E402
 from colorsort.variants import VARIANTS  # noqa: E402
 
 
@@ -31,8 +32,13 @@ def main() -> None:
     p.add_argument("--episodes", type=int, default=10)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--image-size", type=int, default=64)
+    p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated variant names (default: all)")
     args = p.parse_args()
-    jobs = [(policy, v, args.episodes, args.image_size) for v in VARIANTS for policy in ("expert", "random")]
+    variants = args.variants.split(",")
+    unknown = [v for v in variants if v not in VARIANTS]
+    if unknown:
+        p.error(f"unknown variant(s) {unknown}; valid variants: {list(VARIANTS)}")
+    jobs = [(policy, v, args.episodes, args.image_size) for v in variants for policy in ("expert", "random")]
     with mp.get_context("spawn").Pool(args.workers) as pool:
         reports = pool.map(run, jobs, chunksize=1)
     print(f"{args.episodes} episodes per row, seeds {reports[0].seeds[0]}..{reports[0].seeds[-1]}\n")

@@ -75,8 +75,8 @@ def test_the_named_layout_addresses_what_each_segment_holds(recorded):
     layout = env.sim_state_layout
     s = layout.slices
     assert layout.size == env.sim_state_size == len(states[0])
-    assert list(s) == ["mujoco", "boxes", "held", "weld", "belt_pass", "belt_running", "next_spawn_time",
-                       "next_serial", "clock", "rng"]
+    assert list(s) == ["mujoco", "boxes", "held", "weld", "belt_pass", "belt_running", "belt_travel",
+                       "next_spawn_time", "next_serial", "clock", "rng"]
     last = states[-1]
     assert last[s["clock"]][0] == pytest.approx(140 * env.control_timestep)
     assert last[s["mujoco"]][0] == pytest.approx(last[s["clock"]][0])  # MuJoCo's time leads its state

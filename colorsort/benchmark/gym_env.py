@@ -71,7 +71,7 @@ class ColorSortGymEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": fps}
         robot = ROBOTS[self.variant.robot]
         obs_spaces = {
-            "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(robot.n_joints),), np.float32),
+            "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(robot.n_joints, self.variant.task_config.tracking),), np.float32),
             "environment_state": spaces.Box(-np.inf, np.inf, (ENV_STATE_SIZE,), np.float32),
         }
         if self.cameras:

@@ -53,10 +53,11 @@ class ColorSortEnv(EnvConfig):
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        n = ROBOTS[variant_of_task(self.task).robot].n_joints
+        variant = variant_of_task(self.task)
+        n = ROBOTS[variant.robot].n_joints
         self.features = {
             ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(n + 2,)),
-            "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(state_size(n),)),
+            "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(state_size(n, variant.task_config.tracking),)),
             "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(ENV_STATE_SIZE,)),
         }
         self.features_map = {ACTION: ACTION, "agent_pos": OBS_STATE, "environment_state": OBS_ENV_STATE}

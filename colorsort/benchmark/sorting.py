@@ -70,6 +70,9 @@ class SortReport:
     boxes_per_minute: float = 0.0
     sim_time_s: float = 0.0
     peak_speed_ratio: float = 0.0  # max over steps and joints of |joint velocity| / datasheet speed
+    belt_stopped_s: float = 0.0  # [s] sim time the belt stood still (0 on a tracking belt)
+    let_go: int = 0  # boxes of a bin colour the tracking expert could not meet in time and let ride off
+    phase_seconds: dict[str, float] = field(default_factory=dict)  # [s] sim time the expert spent in each phase
     boxes: list[BoxReport] = field(default_factory=list)
 
     def to_json(self) -> dict:
@@ -101,7 +104,10 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
                 box = _box_at_sensor(env)
                 if box is not None:
                     handled[box] = len(expert.cycles) - 1
-            obs, _, _, _ = env.step(action)
+            phase = expert.phase.value
+            report.phase_seconds[phase] = report.phase_seconds.get(phase, 0.0) + env.control_timestep
+            obs, _, _, info = env.step(action)
+            report.belt_stopped_s += 0.0 if info["belt_running"] else env.control_timestep
             speed = float(np.max(np.abs(obs["robot0_joint_vel"]) / vmax))
             report.peak_speed_ratio = max(report.peak_speed_ratio, speed)
             if writer is not None:
@@ -130,6 +136,7 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
             if thumbs:
                 save_png(Path(config.video).with_suffix(".png"), contact_sheet(thumbs))
         env.close()
+    report.let_go = getattr(expert, "let_go", 0)
     report.sim_time_s = env.events[-1].time if len(env.events) >= config.boxes else env.cur_time
     report.boxes_per_minute = 60.0 * len(report.boxes) / report.sim_time_s if report.sim_time_s > 0 else 0.0
     return report

@@ -17,15 +17,21 @@ from colorsort.config import CellLayout, TaskConfig
 class Belt:
     """Runs the belt from the ray sensor and the belt-pass command, once per physics step.
 
+    On a stopping belt (the original cell) the ray stops the belt while it sees a box; on a
+    tracking belt (``TaskConfig.tracking``) the belt never stops and the ray only reports.
+
     Attributes:
-        running: the belt moves (the ray is clear, or the belt-pass command is on).
+        running: the belt moves (tracking, the ray is clear, or the belt-pass command is on).
         box_detected: the ray sees something within its range.
         belt_pass: the command to run the belt even while the ray is blocked (how a box with no
             bin is let through).
+        travel: [m] the distance the belt surface has travelled this episode: its encoder.
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, layout: CellLayout, speed: float):
-        self.data, self.layout, self.speed = data, layout, speed
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, layout: CellLayout, speed: float,
+                 tracking: bool = False):
+        self.data, self.layout, self.speed, self.tracking = data, layout, speed, tracking
+        self.timestep = float(model.opt.timestep)  # [s] one physics step
         joint = model.joint("belt_slide").id
         self.qpos, self.qvel = model.jnt_qposadr[joint], model.jnt_dofadr[joint]
         self.ray = model.sensor_adr[model.sensor("ray").id]
@@ -36,6 +42,7 @@ class Belt:
         self.data.qpos[self.qpos] = 0.0
         self.data.qvel[self.qvel] = 0.0
         self.running, self.box_detected, self.belt_pass = True, False, False
+        self.travel = 0.0
 
     def sense(self) -> bool:
         """Read the ray (from the last computed sensor data) into ``box_detected``."""
@@ -44,11 +51,14 @@ class Belt:
         return self.box_detected
 
     def drive(self) -> None:
-        """Run or stop the belt from the ray and the pass command; hold the surface in place."""
+        """Run or stop the belt from the ray and the pass command for the coming physics step; hold the
+        surface in place and count its travel."""
         self.sense()
-        self.running = self.belt_pass or not self.box_detected
+        self.running = self.tracking or self.belt_pass or not self.box_detected
         self.data.qpos[self.qpos] = 0.0
         self.data.qvel[self.qvel] = -self.speed if self.running else 0.0
+        if self.running:
+            self.travel += self.speed * self.timestep
 
 
 class Spawner:

@@ -12,10 +12,11 @@ Action (8,) for the IRB 140: absolute joint position targets for the arm's six j
     Suction and belt pass act on their sign only: any positive value is on.
 Observations: robosuite proprioception (``robot0_joint_pos``, ``robot0_eef_pos``, ...);
     ``box_detected``, ``belt_running`` and ``suction_sealed`` (the cup's vacuum switch) as 1.0
-    or 0.0; with ``use_camera_obs`` the images
+    or 0.0, ``belt_travel`` (the belt's encoder [m]); with ``use_camera_obs`` the images
     ``scene_image``, ``sensor_image``, ``wrist_image`` (H, W, 3) uint8, right side up.
 Belt: carries boxes toward the arm at ``belt_speed`` [m/s]; stops while the ray is blocked,
-    unless the belt-pass command is on.
+    unless the belt-pass command is on. With ``tracking`` it never stops (the ray only reports),
+    and the ray and colour camera stand upstream (``config.layout_for``).
 Spawner: a box from the pool every ``spawn_period`` [s] at the belt's upstream end, colour
     drawn from ``box_colors`` by the env's seeded generator, optional lateral and yaw jitter;
     waits while the pool is empty or the spawn point is occupied.
@@ -58,7 +59,7 @@ from colorsort.cell.referee import BoxEvent, Tally
 from colorsort.cell.rendering import check_gl
 from colorsort.cell.sim_state import SimStateLayout
 from colorsort.cell.suction import add_welds
-from colorsort.config import CellLayout, Lighting, TaskConfig, make_config
+from colorsort.config import CellLayout, Lighting, TaskConfig, layout_for, make_config
 from colorsort.paths import asset_path
 from colorsort.robots import GRIPPERS, ROBOTS, RobotSpec
 
@@ -107,7 +108,7 @@ class ColorSort(ManipulationEnv):
         self.config = config if config is not None else make_config(preset, **overrides)
         if config is not None and overrides:
             raise ValueError("Pass either config or field overrides, not both")
-        self.layout = layout or CellLayout()
+        self.layout = layout or layout_for(self.config)
         self.robot_spec: RobotSpec = ROBOTS[robot_list[0]]
         cams = [camera_names] if isinstance(camera_names, str) else list(camera_names)
         cameras.check_cameras(cams)
@@ -260,7 +261,7 @@ class ColorSort(ManipulationEnv):
         observables = super()._setup_observables()
 
         flags = {"box_detected": lambda: self.box_detected, "belt_running": lambda: self.belt_running,
-                 "suction_sealed": lambda: self.suction_sealed}
+                 "suction_sealed": lambda: self.suction_sealed, "belt_travel": lambda: self.plant.belt.travel}
         sensors = [sensor(modality="object")(_named(name, lambda cache, f=f: np.array([float(f())])))
                    for name, f in flags.items()]
         if self.use_object_obs:

@@ -34,7 +34,7 @@ class Plant:
                  cup: str, pad: str, suction: str):
         self.model, self.data = model, data
         self.pool = BoxPool(model, data, config.pool_size, layout)
-        self.belt = Belt(model, data, layout, config.belt_speed)
+        self.belt = Belt(model, data, layout, config.belt_speed, config.tracking)
         self.spawner = Spawner(self.pool, config)
         self.referee = Referee(layout, config.bin_capacity)
         names = [f"box{i}" for i in range(config.pool_size)]
@@ -108,6 +108,7 @@ class Plant:
         bins = {color: [b.color == color for b in self.pool.in_bin(color)] for color in BIN_COLORS}
         return {
             "belt_running": self.belt.running,
+            "belt_travel": self.belt.travel,
             "box_detected": self.belt.box_detected,
             "placed": dict(t.placed),
             "misplaced": t.misplaced,

@@ -15,6 +15,7 @@ segment               length               what
 ``weld``              ``mjNEQDATA``        the seal's weld ``eq_data`` (zeros when none)
 ``belt_pass``         1                    the belt-pass command, 0 or 1
 ``belt_running``      1                    0 or 1
+``belt_travel``       1                    [m] the belt's encoder: distance its surface travelled
 ``next_spawn_time``   1                    [s]
 ``next_serial``       1
 ``clock``             1                    the env's clock [s]
@@ -38,13 +39,13 @@ from colorsort.config import BIN_COLORS, COLORS
 if TYPE_CHECKING:
     from colorsort.cell.env import ColorSort
 
-VERSION = 1
+VERSION = 2  # 2: belt_travel (the belt's encoder) added
 # The parts of MuJoCo's state that ColorSort changes while it runs.
 MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
                  | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
                  | mujoco.mjtState.mjSTATE_WARMSTART)
 RNG_STATE_SIZE = 10  # a PCG64 generator's state and increment (4 x 32 bits each), then its uint32 buffer
-SCALARS = ("held", "belt_pass", "belt_running", "next_spawn_time", "next_serial", "clock")
+SCALARS = ("held", "belt_pass", "belt_running", "belt_travel", "next_spawn_time", "next_serial", "clock")
 
 
 def rng_to_words(rng: np.random.Generator) -> np.ndarray:
@@ -111,6 +112,7 @@ class CellState:
     weld: np.ndarray  # (mjNEQDATA,)
     belt_pass: bool
     belt_running: bool
+    belt_travel: float  # [m]
     next_spawn_time: float  # [s]
     next_serial: int
     clock: float  # [s]
@@ -132,7 +134,8 @@ class CellState:
         scalar = {name: vector[s[name]][0] for name in SCALARS}
         return cls(mujoco=vector[s["mujoco"]], boxes=vector[s["boxes"]].reshape(-1, 4).astype(int),
                    held=int(scalar["held"]), weld=vector[s["weld"]], belt_pass=bool(scalar["belt_pass"]),
-                   belt_running=bool(scalar["belt_running"]), next_spawn_time=float(scalar["next_spawn_time"]),
+                   belt_running=bool(scalar["belt_running"]),
+                   belt_travel=float(scalar["belt_travel"]), next_spawn_time=float(scalar["next_spawn_time"]),
                    next_serial=int(scalar["next_serial"]), clock=float(scalar["clock"]), rng=vector[s["rng"]])
 
 
@@ -147,8 +150,9 @@ def capture(env: ColorSort) -> np.ndarray:
               BIN_COLORS.index(b.bin) if b.bin is not None else -1, b.serial) for b in env.boxes]
     held = env.plant.seal.held if env.plant.seal.held is not None else -1
     weld = m.eq_data[env.plant.seal.welds[held]] if held >= 0 else np.zeros(mujoco.mjNEQDATA)
-    state = CellState(mj, np.array(boxes), held, weld, env.plant.belt.belt_pass, env.plant.belt.running, env.plant.spawner.next_time,
-                      env.plant.spawner.next_serial, env.cur_time, rng_to_words(env.rng))
+    belt, spawner = env.plant.belt, env.plant.spawner
+    state = CellState(mj, np.array(boxes), held, weld, belt.belt_pass, belt.running, belt.travel, spawner.next_time,
+                      spawner.next_serial, env.cur_time, rng_to_words(env.rng))
     return state.pack(layout)
 
 
@@ -167,7 +171,7 @@ def restore(env: ColorSort, vector: np.ndarray) -> None:
     env.plant.seal.held = s.held if s.held >= 0 else None
     if s.held >= 0:
         m.eq_data[env.plant.seal.welds[s.held]] = s.weld
-    env.plant.belt.belt_pass, env.plant.belt.running = s.belt_pass, s.belt_running
+    env.plant.belt.belt_pass, env.plant.belt.running, env.plant.belt.travel = s.belt_pass, s.belt_running, s.belt_travel
     env.plant.spawner.next_time, env.plant.spawner.next_serial, env.cur_time = s.next_spawn_time, s.next_serial, s.clock
     env.rng = rng_from_words(s.rng)
     env.timestep = int(round(env.cur_time / env.control_timestep))

@@ -53,6 +53,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{report.sim_time_s:.1f} s of sim time")
     print(f"correct {report.correct}  misplaced {report.misplaced}  dropped {report.dropped}  "
           f"rejected {report.rejected}  boxes/min {report.boxes_per_minute:.1f}")
+    print(f"belt stood still {report.belt_stopped_s:.1f} s" + (f"  let go {report.let_go}" if report.let_go else ""))
     if config.json:
         Path(config.json).parent.mkdir(parents=True, exist_ok=True)
         Path(config.json).write_text(json.dumps(report.to_json(), indent=2))

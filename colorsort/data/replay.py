@@ -9,6 +9,7 @@ judged a success again (``referee.judge``), through the same states.
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -47,8 +48,6 @@ class RecordedEpisode:
 
 def load_episode(root: str | Path, index: int, repo_id: str | None = None) -> RecordedEpisode:
     """Read episode ``index`` of the ColorSort dataset at ``root`` (offline)."""
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
-
     root = Path(root)
     marker_path = root / MARKER
     if not marker_path.is_file():
@@ -58,13 +57,23 @@ def load_episode(root: str | Path, index: int, repo_id: str | None = None) -> Re
     if layout is not None and layout["version"] != sim_state.VERSION:
         raise ValueError(f"{root} stores sim_state version {layout['version']}; this ColorSort reads version "
                          f"{sim_state.VERSION}: replay it with the ColorSort that recorded it")
-    meta = LeRobotDatasetMetadata(repo_id or settings["repo_id"], root=root)
+    meta = _metadata(repo_id or settings["repo_id"], root)
     if not 0 <= index < meta.total_episodes:
         raise ValueError(f"episode {index} does not exist; valid episodes: 0..{meta.total_episodes - 1}")
     ds = _episode_frames(root, meta, index)
     return RecordedEpisode(root, index, settings, np.stack(ds[SIM_STATE]).astype(np.float64),
                            np.stack(ds[ACTION]).astype(np.float32), np.stack(ds[STATE]).astype(np.float32),
                            np.stack(ds[ENV_STATE]).astype(np.float32), meta.episodes[index]["tasks"][0])
+
+
+def _metadata(repo_id: str, root: Path):
+    """LeRobot's metadata of the dataset at ``root``, without datasets' note that progress bars stay off
+    (``HF_DATASETS_DISABLE_PROGRESS_BARS``, which the collector sets)."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Cannot enable progress bars")
+        return LeRobotDatasetMetadata(repo_id, root=root)
 
 
 def _episode_frames(root: Path, meta, index: int) -> dict:
@@ -81,12 +90,11 @@ def _episode_frames(root: Path, meta, index: int) -> dict:
 def recorded_frames(episode: RecordedEpisode, camera: str) -> np.ndarray:
     """The dataset's frames of ``camera`` for this episode, decoded: (T, H, W, 3) uint8."""
     import av
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.video_utils import decode_video_frames
 
     av.logging.set_libav_level(av.logging.ERROR)
 
-    meta = LeRobotDatasetMetadata(episode.settings["repo_id"], root=episode.root)
+    meta = _metadata(episode.settings["repo_id"], episode.root)
     key = image_key(camera)
     start = meta.episodes[episode.index][f"videos/{key}/from_timestamp"]
     stamps = [start + k / episode.fps for k in range(len(episode.states))]

@@ -8,7 +8,9 @@ key                               dtype      shape       what
 ``observation.images.<camera>``   video      (H, W, 3)   camera ``scene``, ``sensor`` or ``wrist``, RGB
 ``observation.state``             float32    (2n + 11,)  joint positions [rad] and velocities [rad/s], cup
                                                          position [m] and quaternion (x, y, z, w), suction
-                                                         commanded, vacuum sealed, ray blocked, belt running
+                                                         commanded, vacuum sealed, ray blocked, belt running;
+                                                         on a tracking belt (2n + 12,): then the belt's
+                                                         encoder [m]
 ``observation.environment_state`` float32    (13,)       the next box to sort (lowest serial in play): colour
                                                          one-hot over ``config.COLORS``, position [m],
                                                          quaternion (w, x, y, z), 1 if there is one
@@ -49,20 +51,22 @@ def joint_names(env: ColorSort) -> list[str]:
     return [j.removeprefix(prefix) for j in env.robots[0].robot_joints]
 
 
-def _state_names(joints: list[str]) -> list[str]:
+def _state_names(joints: list[str], tracking: bool) -> list[str]:
+    # The encoder only on a tracking belt: on a stopping one it adds nothing a policy needs, and the
+    # policies trained on stopping-belt data keep their input.
     return ([f"{j}.pos" for j in joints] + [f"{j}.vel" for j in joints]
             + ["cup.x", "cup.y", "cup.z", "cup.qx", "cup.qy", "cup.qz", "cup.qw",
-               "suction.on", "suction.sealed", "ray.blocked", "belt.running"])
+               "suction.on", "suction.sealed", "ray.blocked", "belt.running"] + (["belt.travel"] if tracking else []))
 
 
 def state_names(env: ColorSort) -> list[str]:
     """The names of ``observation.state``'s elements."""
-    return _state_names(joint_names(env))
+    return _state_names(joint_names(env), env.config.tracking)
 
 
-def state_size(n_joints: int) -> int:
-    """Length of ``observation.state`` for an arm with ``n_joints`` joints."""
-    return len(_state_names([f"joint{k}" for k in range(n_joints)]))
+def state_size(n_joints: int, tracking: bool = False) -> int:
+    """Length of ``observation.state`` for an arm with ``n_joints`` joints, on a tracking belt or not."""
+    return len(_state_names([f"joint{k}" for k in range(n_joints)], tracking))
 
 
 def env_state_names() -> list[str]:
@@ -101,6 +105,8 @@ def features(env: ColorSort, cameras: tuple[str, ...], image_size: tuple[int, in
 def robot_state(env: ColorSort, obs: dict[str, Any]) -> np.ndarray:
     """``observation.state`` from an observation of ``env`` (see the module docstring)."""
     flags = [env.plant.seal.commanded, env.suction_sealed, env.box_detected, env.belt_running]
+    if env.config.tracking:
+        flags.append(env.plant.belt.travel)
     return np.concatenate([obs["robot0_joint_pos"], obs["robot0_joint_vel"], obs["robot0_eef_pos"],
                            obs["robot0_eef_quat"], np.asarray(flags, float)]).astype(np.float32)
 

@@ -30,6 +30,11 @@ class ExpertConfig:
         release_time: [s] time after the seal is gone before moving on (the box falls clear).
         sensor_image_size: [px] side of the triggered photo, when the env's observations do not
             include ``sensor_image``.
+        track_descend_time: [s] on a tracking belt, from over the moving box down onto it.
+        track_hold_time: [s] then on it, while the seal forms.
+        track_lift_time: [s] then up until the box's bottom is ``track_lift_gap`` over the belt, still moving
+            with it; from there it goes to its bin.
+        track_lift_gap: [m] the box's bottom over the belt when the tracking ends (the rails stand 2 cm high).
     """
 
     motion: MotionConfig = field(default_factory=MotionConfig)
@@ -47,6 +52,10 @@ class ExpertConfig:
     grip_timeout: float = 1.0
     release_time: float = 0.15
     sensor_image_size: int = 128
+    track_descend_time: float = 0.20
+    track_hold_time: float = 0.05
+    track_lift_time: float = 0.15
+    track_lift_gap: float = 0.05
 
     def __post_init__(self) -> None:
         check_range("carry_z", self.carry_z, 0.4, 1.2)
@@ -60,3 +69,6 @@ class ExpertConfig:
         check_range("grip_timeout", self.grip_timeout, 0.05, 10.0)
         check_range("release_time", self.release_time, 0.0, 5.0)
         check_range("sensor_image_size", self.sensor_image_size, 16, 1024)
+        for name in ("track_descend_time", "track_hold_time", "track_lift_time"):
+            check_range(name, getattr(self, name), 0.05, 2.0)
+        check_range("track_lift_gap", self.track_lift_gap, 0.03, 0.3)

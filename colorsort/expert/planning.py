@@ -143,7 +143,7 @@ class CupIK:
 
 
 class JointTrajectory:
-    """A rest-to-rest jerk-limited joint trajectory (ruckig), sampled by time."""
+    """A jerk-limited joint trajectory (ruckig), sampled by time."""
 
     def __init__(self, trajectory: ruckig.Trajectory, start: np.ndarray, goal: np.ndarray):
         self._trajectory = trajectory
@@ -162,23 +162,30 @@ class JointTrajectory:
         return np.array(pos), np.array(vel), np.array(acc)
 
 
-def plan_motion(start: np.ndarray, goal: np.ndarray, max_velocity: np.ndarray, config: MotionConfig) -> JointTrajectory:
-    """Time-optimal jerk-limited motion from rest at ``start`` to rest at ``goal`` [rad], (n,).
+def plan_motion(start: np.ndarray, goal: np.ndarray, max_velocity: np.ndarray, config: MotionConfig,
+                start_velocity: np.ndarray | None = None, start_acceleration: np.ndarray | None = None,
+                goal_velocity: np.ndarray | None = None, minimum_duration: float | None = None) -> JointTrajectory:
+    """Time-optimal jerk-limited motion from ``start`` to ``goal`` [rad], (n,): from rest to rest unless
+    ``start_velocity`` [rad/s], ``start_acceleration`` [rad/s^2] or ``goal_velocity`` [rad/s] say otherwise
+    (ruckig plans to a target velocity as well as a position), taking at least ``minimum_duration`` [s].
 
     Args:
         max_velocity: the robot's joint speed limits [rad/s], (n,); scaled by ``config.speed_factor``.
     """
     n = len(start)
+    zeros = [0.0] * n
     inp = ruckig.InputParameter(n)
     inp.current_position = list(map(float, start))
-    inp.current_velocity = [0.0] * n
-    inp.current_acceleration = [0.0] * n
+    inp.current_velocity = zeros if start_velocity is None else list(map(float, start_velocity))
+    inp.current_acceleration = zeros if start_acceleration is None else list(map(float, start_acceleration))
     inp.target_position = list(map(float, goal))
-    inp.target_velocity = [0.0] * n
-    inp.target_acceleration = [0.0] * n
+    inp.target_velocity = zeros if goal_velocity is None else list(map(float, goal_velocity))
+    inp.target_acceleration = zeros
     inp.max_velocity = list(map(float, np.asarray(max_velocity) * config.speed_factor))
     inp.max_acceleration = [config.acceleration] * n
     inp.max_jerk = [config.jerk] * n
+    if minimum_duration is not None:
+        inp.minimum_duration = float(minimum_duration)
     trajectory = ruckig.Trajectory(n)
     result = ruckig.Ruckig(n).calculate(inp, trajectory)
     if result not in (ruckig.Result.Working, ruckig.Result.Finished):

@@ -43,6 +43,8 @@ class Phase(Enum):
     LET_THROUGH = "let box through"
     APPROACH = "approach box"
     DESCEND = "descend"
+    INTERCEPT = "intercept box"  # tracking: over the moving box, moving with it
+    TRACK = "track box"  # tracking: down onto the moving box, seal and lift, moving with it
     GRIP = "grip"
     BACK_UP = "back up"
     MOVE_OVER_BIN = "move over bin"
@@ -97,9 +99,7 @@ class SortingExpert:
         self.ik = CupIK(calibration.kinematics, self.home)
         self.cup_yaw = site_yaw(self.ik.cup_pose(self.home)[1])  # a multiple of 90 deg: bins' axes
         self.sensor = ColorSensor(calibration.camera, L, config.perception)
-        px, py, _ = L.pick_point
-        self.q_wait = self.ik.solve(Waypoint("wait", (px, py + config.wait_offset_y, config.carry_z), self.cup_yaw),
-                                    self.home)
+        self.q_wait = self.ik.solve(Waypoint("wait", self._wait_point(), self.cup_yaw), self.home)
         self.q_drop = {color: self._drop_slots(color, k) for k, color in enumerate(BIN_COLORS)}
         self._handlers: dict[Phase, Callable[[dict, np.ndarray, np.ndarray], None]] = {
             Phase.MOVE_TO_WAIT: self._move_to_wait, Phase.WAIT_FOR_BOX: self._wait_for_box,
@@ -111,11 +111,25 @@ class SortingExpert:
 
     @classmethod
     def from_env(cls, env: ColorSort, config: ExpertConfig = ExpertConfig()) -> SortingExpert:
-        """An expert calibrated on ``env``, which must have an off-screen renderer (the sensor camera)."""
+        """An expert calibrated on ``env``, which must have an off-screen renderer (the sensor camera);
+        on a tracking belt a ``TrackingExpert``."""
         if not env.has_offscreen_renderer:
             raise ValueError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
         size, image = sensor_source(env, config.sensor_image_size)
+        if env.config.tracking and cls is SortingExpert:
+            from colorsort.expert.tracking import TrackingExpert
+
+            cls = TrackingExpert
         return cls(Calibration.from_env(env, size), image, config)
+
+    def _drop_seed(self) -> np.ndarray:
+        """The joint angles [rad] the drop points' IK starts from: the wait pose, beside the bins."""
+        return self.q_wait
+
+    def _wait_point(self) -> tuple[float, float, float]:
+        """Where the cup waits for a box [m]: beside and above the pick point, toward the bins, out of view."""
+        px, py, _ = self.layout.pick_point
+        return (px, py + self.config.wait_offset_y, self.config.carry_z)
 
     def _drop_slots(self, color: str, index: int) -> list[np.ndarray]:
         """Joint angles of up to ``drop_slots`` release points over a bin, nearest the robot first.
@@ -133,7 +147,7 @@ class SortingExpert:
         slots = []
         for x, y in grid:
             try:
-                slots.append(self.ik.solve(Waypoint(f"{color} bin drop", (x, y, z), self.cup_yaw), self.q_wait))
+                slots.append(self.ik.solve(Waypoint(f"{color} bin drop", (x, y, z), self.cup_yaw), self._drop_seed()))
             except UnreachableWaypoint:
                 continue
             if len(slots) == cfg.drop_slots:

@@ -1,0 +1,141 @@
+"""Conveyor tracking: a belt that never stops, its encoder, and the expert picking moving boxes."""
+
+import numpy as np
+import pytest
+from conftest import make_env
+
+from colorsort.expert.sorter import SortingExpert
+from colorsort.expert.sorter import Cycle
+from colorsort.expert.tracking import Sighting, TrackingExpert
+
+
+def tracking_env(**overrides):
+    return make_env(preset="tracking", has_offscreen_renderer=True, use_camera_obs=False, **overrides)
+
+
+def test_the_belt_never_stops_while_boxes_pass_the_ray_and_the_encoder_counts_belt_speed_times_time():
+    env = tracking_env(ignore_done=True)
+    obs = env.reset(seed=0)
+    hold = np.concatenate([env.robot_spec.home, [-1.0, -1.0]])
+    blocked = running = 0
+    for _ in range(300):  # 15 s: four boxes cross the ray and ride off the end
+        obs, _, _, info = env.step(hold)
+        blocked += info["box_detected"]
+        running += info["belt_running"]
+    assert blocked > 10 and running == 300
+    assert float(obs["belt_travel"]) == pytest.approx(env.config.belt_speed * env.cur_time, rel=1e-9)
+    assert env.tally.dropped >= 3 and env.tally.placed == {"red": 0, "green": 0, "blue": 0}  # nobody picked them
+    env.close()
+
+
+def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins():
+    env = tracking_env(ignore_done=True)
+    obs = env.reset(seed=1)
+    expert = SortingExpert.from_env(env)
+    assert isinstance(expert, TrackingExpert)
+    expert.reset(obs)
+    belt_stopped = 0
+    while len(env.events) < 4 and env.cur_time < 30.0:
+        obs, _, _, info = env.step(expert.act(obs))
+        belt_stopped += not info["belt_running"]
+    assert [e.outcome for e in env.events[:4]] == ["placed"] * 4, env.events
+    assert belt_stopped == 0 and expert.let_go == 0
+    assert env.events[3].time < 4 * env.config.spawn_period + 5.0  # it keeps pace with the spawner
+    env.close()
+
+
+def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped():
+    env = tracking_env(ignore_done=True, spawn_period=600.0)  # one box, spawned at reset, rides far upstream
+    obs = env.reset(seed=2)
+    expert = SortingExpert.from_env(env)
+    expert.reset(obs)
+    obs, _, _, _ = env.step(expert.act(obs))
+    lo, _ = expert.window
+    late = env.put_box("red", lo + 0.04, env.layout.belt_y)  # in reach, but too near the end to follow down and up
+    obs, serial = env.observe(), late.serial
+    cycle = Cycle("red", expert.time, target_bin="red")
+    expert.cycles.append(cycle)
+    expert.queue.append(Sighting(cycle, float(env.box_pos(late)[0]), env.layout.belt_y, expert.cup_yaw,
+                                 float(obs["belt_travel"])))
+    suction = []
+    while late.status.value == "in_play" and env.cur_time < 10.0:
+        action = expert.act(obs)
+        suction.append(action[-2] > 0)
+        obs, _, _, _ = env.step(action)
+    assert expert.let_go == 1 and cycle.target_bin is None and not any(suction)
+    assert [(e.serial, str(e.outcome)) for e in env.events] == [(serial, "dropped")] and env.tally.dropped == 1
+    env.close()
+
+
+def test_a_tracking_episode_replays_bit_for_bit(tmp_path):
+    from colorsort.data.collect import collect
+    from colorsort.data.config import CollectConfig
+    from colorsort.data.replay import replay
+
+    out = tmp_path / "tracking"
+    summary = collect(CollectConfig(episodes=1, boxes_per_episode=2, preset="tracking", cameras=(), out=str(out)),
+                      progress=False, log=lambda _: None)
+    assert summary.kept == 1
+    report = replay(out, 0, camera="scene", size=(32, 32), progress=False)
+    assert report.state_mismatches == 0 and report.max_state_error == 0.0
+    assert report.outcomes == ["placed", "placed"] and report.action_replay_ok
+
+
+def test_tracking_observation_state_ends_with_the_encoder():
+    from colorsort.data.schema import robot_state, state_names, state_size
+
+    env = tracking_env()
+    obs = env.reset(seed=0)
+    for _ in range(10):
+        obs, _, _, _ = env.step(np.concatenate([env.robot_spec.home, [-1.0, -1.0]]))
+    names = state_names(env)
+    assert names[-1] == "belt.travel" and len(names) == state_size(6, tracking=True) == state_size(6) + 1
+    assert robot_state(env, obs)[-1] == pytest.approx(0.2 * 0.5, rel=1e-6)  # 0.2 m/s for 0.5 s
+    env.close()
+
+
+def test_the_cup_seals_and_lifts_a_box_moving_under_it_at_belt_speed():
+    """demos/bench_seal.py's trial: the cup held still, the box riding under it at 0.2 m/s (what the expert
+    meets if it did not match the belt at all) and at 0.5 m/s (the fastest belt)."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("bench_seal", Path(__file__).parents[1] / "demos" / "bench_seal.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    for speed, max_offset_mm in ((0.2, 25.0), (0.5, 45.0)):
+        r = bench.trial(speed)
+        assert r["sealed"] and r["held"] and r["lifted"], r
+        assert r["offset_mm"] < max_offset_mm and r["turn_deg"] < 2.0, r
+
+
+def test_tracking_variants_give_the_encoder_to_gymnasium_and_lerobot():
+    import gymnasium as gym
+
+    from colorsort.benchmark.lerobot_env import ColorSortEnv
+
+    env = gym.make("colorsort/ColorSort-Tracking-v0", cameras=())
+    obs, _ = env.reset(seed=0)
+    assert obs["agent_pos"].shape == (24,) == env.observation_space["agent_pos"].shape
+    obs, *_ = env.step(env.action_space.sample())
+    assert obs["agent_pos"][-1] == pytest.approx(0.2 * 0.05, rel=1e-5)  # the encoder after one 50 ms step
+    env.close()
+    assert ColorSortEnv(task="ColorSort-Tracking-v0").features["agent_pos"].shape == (24,)
+    assert ColorSortEnv(task="ColorSort-v0").features["agent_pos"].shape == (23,)
+
+
+def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
+    import json
+
+    from colorsort.cli.sort import main as sort_main
+
+    for preset in ("tracking", "default"):
+        out = tmp_path / f"{preset}.json"
+        assert sort_main(["--preset", preset, "--boxes", "3", "--seed", "0", "--json", str(out)]) == 0
+        report = json.loads(out.read_text())
+        assert report["correct"] == 3 and report["dropped"] == 0 and report["let_go"] == 0
+        if preset == "tracking":
+            assert report["belt_stopped_s"] == 0.0 and report["phase_seconds"]["track box"] > 0
+        else:  # the belt waits while the arm picks each box
+            assert report["belt_stopped_s"] > 3 * 0.5
+    assert "belt stood still 0.0 s" in capsys.readouterr().out
