@@ -5,7 +5,8 @@
 Runs ``colorsort-sort``'s loop (the scripted expert, IRB 140 at its datasheet joint speeds unless
 ``--robot``) on each preset for seeds 0..seeds-1 and prints one row per preset: boxes correct,
 misplaced, dropped, rejected, let go, boxes per minute of sim time (mean, min-max over seeds),
-how long the belt stood still, and where the arm's time went per box handled (sim seconds per
+how long the belt stood still, the fastest joint speed seen over its datasheet limit (``v/vmax``,
+at the control rate), and where the arm's time went per box handled (sim seconds per
 expert phase, summed over seeds and divided by the boxes placed). Counting is ``colorsort-sort``'s:
 boxes that left play per minute of sim time up to the last of them.
 
@@ -63,8 +64,9 @@ def main() -> None:
     wall = time.perf_counter() - start
 
     print(f"{args.robot}, seeds 0..{args.seeds - 1}, {args.boxes} boxes each ({wall:.0f} s wall, {args.workers} workers)")
-    print("| preset | belt | correct | misplaced | dropped | rejected | let go | boxes/min (min-max) | belt stood still |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| preset | belt | correct | misplaced | dropped | rejected | let go | boxes/min (min-max) | belt stood still "
+          "| v/vmax |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for preset, reports in runs.items():
         task = PRESETS[preset]
         total = {k: sum(r[k] for r in reports) for k in ("correct", "misplaced", "dropped", "rejected", "let_go")}
@@ -73,7 +75,7 @@ def main() -> None:
         belt = f"{'tracking' if task.tracking else 'stopping'}, {task.belt_speed} m/s, a box every {task.spawn_period} s"
         print(f"| {preset} | {belt} | {total['correct']} | {total['misplaced']} | {total['dropped']} | {total['rejected']} "
               f"| {total['let_go']} | {np.mean(rates):.1f} ({np.min(rates):.1f}-{np.max(rates):.1f}) "
-              f"| {100 * stood:.0f}% of sim time |")
+              f"| {100 * stood:.0f}% of sim time | {max(r['peak_speed_ratio'] for r in reports):.2f} |")
     print()
     print("where the arm's time goes, sim seconds per box placed:")
     print("| phase | " + " | ".join(runs) + " |")

@@ -9,8 +9,8 @@ from colorsort.expert.sorter import Cycle
 from colorsort.expert.tracking import Sighting, TrackingExpert
 
 
-def tracking_env(**overrides):
-    return make_env(preset="tracking", has_offscreen_renderer=True, use_camera_obs=False, **overrides)
+def tracking_env(robot: str = "IRB140", **overrides):
+    return make_env(robot, preset="tracking", has_offscreen_renderer=True, use_camera_obs=False, **overrides)
 
 
 def test_the_belt_never_stops_while_boxes_pass_the_ray_and_the_encoder_counts_belt_speed_times_time():
@@ -28,8 +28,9 @@ def test_the_belt_never_stops_while_boxes_pass_the_ray_and_the_encoder_counts_be
     env.close()
 
 
-def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins():
-    env = tracking_env(ignore_done=True)
+@pytest.mark.parametrize("robot", ["IRB140", "UR5e"])
+def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins(robot):
+    env = tracking_env(robot=robot, ignore_done=True)
     obs = env.reset(seed=1)
     expert = SortingExpert.from_env(env)
     assert isinstance(expert, TrackingExpert)

@@ -5,7 +5,7 @@ per variant (``colorsort.variants``)::
 
     import gymnasium as gym, colorsort
     env = gym.make("colorsort/ColorSort-Jitter-v0", cameras=("scene", "wrist"), image_size=(128, 128))
-    obs, info = env.reset(seed=0)   # obs["pixels"]["scene"]: (128, 128, 3) uint8; obs["agent_pos"]: (23,)
+    obs, info = env.reset(seed=0)   # obs["pixels"]["scene"]: (128, 128, 3) uint8; obs["agent_pos"]: (23,), (24,) tracking
 
 Observations: ``pixels`` (a dict of camera images, (H, W, 3) uint8), ``agent_pos``
 (``observation.state`` of the datasets) and ``environment_state`` (the next box: colour one-hot,
@@ -71,7 +71,8 @@ class ColorSortGymEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": fps}
         robot = ROBOTS[self.variant.robot]
         obs_spaces = {
-            "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(robot.n_joints, self.variant.task_config.tracking),), np.float32),
+            "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(robot.n_joints, self.variant.task_config.tracking),),
+                                    np.float32),
             "environment_state": spaces.Box(-np.inf, np.inf, (ENV_STATE_SIZE,), np.float32),
         }
         if self.cameras:

@@ -37,7 +37,7 @@ class RecordedEpisode:
     settings: dict  # the collector's settings (meta/colorsort.json)
     states: np.ndarray  # (T, S) float64
     actions: np.ndarray  # (T, A) float32
-    robot_states: np.ndarray  # (T, 2n + 11) float32: observation.state
+    robot_states: np.ndarray  # (T, 2n + 11) float32, (T, 2n + 12) on a tracking belt: observation.state
     box_states: np.ndarray  # (T, 13) float32: observation.environment_state
     task: str
 
