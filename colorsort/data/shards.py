@@ -90,8 +90,10 @@ def merge(sources: list[Path], dest: Path, repo_id: str) -> None:
         return
     import warnings
 
+    import av
     from lerobot.datasets.aggregate import aggregate_datasets
 
+    av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's notes on every video it concatenates
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Cannot enable progress bars")
         aggregate_datasets([repo_id] * len(sources), repo_id, roots=sources, aggr_root=dest)
