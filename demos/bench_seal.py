@@ -3,9 +3,9 @@
     python demos/bench_seal.py --speeds 0.02,0.05,0.1,0.2,0.3,0.5
 
 For each relative speed v [m/s] the belt (a tracking belt, which never stops) runs at v and the
-cup, held still over the belt, comes down onto a box as the tracking expert does (down 4.3 cm in
-0.2 s with suction on, 0.1 s on the box, up to carry height in 0.3 s), the box timed to arrive
-under it as the pad lands. Printed per speed: whether the vacuum sealed, whether the box came up
+cup, held still over the belt, comes down onto a box as the tracking expert does (its heights,
+``track_heights``: down 4.3 cm in 0.2 s with suction on, 0.05 s on the box, up until the box's
+bottom is 5 cm over the belt in 0.15 s), the box timed to arrive under it as the pad lands. Printed per speed: whether the vacuum sealed, whether the box came up
 with the cup, the box's offset from the cup's axis once lifted [mm] and its tilt [deg].
 The tracking expert matches the belt's velocity, so the relative speed it seals at is its
 matching error (millimetres per second); this is the margin it has.
@@ -22,8 +22,9 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 from colorsort.cell.env import ColorSort  # noqa: E402
 from colorsort.expert.config import ExpertConfig  # noqa: E402
+from colorsort.expert.calibration import Calibration  # noqa: E402
 from colorsort.expert.planning import CupIK, Waypoint, site_yaw  # noqa: E402
-from colorsort.expert.tracking import DensePath, smoothstep  # noqa: E402
+from colorsort.expert.tracking import DensePath, smoothstep, track_heights  # noqa: E402
 
 
 def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
@@ -34,34 +35,28 @@ def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
     for box in env.boxes_in_play():
         env.remove_box(box)
     cfg, L, dt = ExpertConfig(), env.layout, env.control_timestep
-    home = np.array(env.robot_spec.home)
-    ik = CupIK(env.robots[0].robot_model.get_model(mode="mujoco"), home)
-    yaw = site_yaw(ik.cup_pose(home)[1])
-    top = L.belt_top_z + L.box_size
-    z_over, z_on = top + cfg.approach_gap, top - cfg.press
-    q_over = ik.solve(Waypoint("over", (x_cup, L.belt_y, z_over), yaw), home)
+    cal = Calibration.from_env(env, (cfg.sensor_image_size,) * 2)
+    ik = CupIK(cal.kinematics, cal.home)
+    yaw = site_yaw(ik.cup_pose(cal.home)[1])
+    heights = track_heights(cfg, L, dt)  # the tracking expert's, with the cup held still over x_cup
+    q_over = ik.solve(Waypoint("over", (x_cup, L.belt_y, heights[0]), yaw), cal.home)
     for k in range(40):  # 2 s: to the pose over the belt, and settle
         s = smoothstep(min(1.0, k / 30))
-        obs, _, _, _ = env.step(np.concatenate([home + s * (q_over - home), [-1.0, -1.0]]))
-    t1, t2 = cfg.track_descend_time, cfg.track_descend_time + cfg.track_hold_time
-    t3 = t2 + cfg.track_lift_time
+        obs, _, _, _ = env.step(np.concatenate([cal.home + s * (q_over - cal.home), [-1.0, -1.0]]))
     path, q = [q_over], q_over
-    for k in range(1, int(np.ceil(t3 / dt)) + 1):
-        tau = k * dt
-        z = z_over + (z_on - z_over) * smoothstep(tau / t1) if tau <= t1 else \
-            z_on + (cfg.carry_z - z_on) * smoothstep((tau - t2) / (t3 - t2))
+    for z in heights[1:]:
         q = ik.solve(Waypoint("down and up", (x_cup, L.belt_y, z), yaw), q)
         path.append(q)
     path = DensePath(np.array(path), dt)
-    box = env.put_box("red", x_cup + speed * t1, L.belt_y)  # under the cup as the pad lands
+    box = env.put_box("red", x_cup + speed * cfg.track_descend_time, L.belt_y)  # under the cup as the pad lands
     obs = env.observe()
-    lead = np.asarray(env.robots[0].part_controllers["right"].kd) / np.asarray(env.robots[0].part_controllers["right"].kp)
     sealed = False
-    for k in range(int(np.ceil(t3 / dt)) + 10):
+    for k in range(len(heights) + 10):
         ref, vel, _ = path.sample((k + 1) * dt)
-        obs, _, _, info = env.step(np.concatenate([ref + lead * vel, [1.0, -1.0]]))
+        obs, _, _, info = env.step(np.concatenate([ref + cal.lead * vel, [1.0, -1.0]]))
         sealed = sealed or info["suction_sealed"]
-    lifted = box.status.value == "in_play" and env.box_pos(box)[2] > L.belt_top_z + L.box_size / 2 + 0.05  # 5 cm up
+    # came up with the cup: its bottom more than half the lift over the belt
+    lifted = box.status.value == "in_play" and env.box_pos(box)[2] > L.belt_top_z + L.box_size / 2 + cfg.track_lift_gap / 2
     cup = np.asarray(obs["robot0_eef_pos"])
     offset = 1000 * float(np.hypot(*(env.box_pos(box)[:2] - cup[:2]))) if lifted else float("nan")
     w = env.plant.pool.pose(box)[3]

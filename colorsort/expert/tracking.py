@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from colorsort.config import BIN_COLORS
+from colorsort.config import BIN_COLORS, CellLayout
 from colorsort.expert.calibration import Calibration
 from colorsort.expert.config import ExpertConfig
 from colorsort.expert.planning import JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
@@ -69,6 +69,21 @@ def smoothstep(u: float) -> float:
     """0 -> 1 with zero slope at both ends, u in [0, 1]."""
     u = min(max(u, 0.0), 1.0)
     return u * u * (3.0 - 2.0 * u)
+
+
+def track_heights(config: ExpertConfig, layout: CellLayout, dt: float) -> np.ndarray:
+    """Cup heights [m], one per control period ``dt`` [s] from the meeting, while following a box: from
+    ``approach_gap`` over its top down onto it (``press`` into it), held while the seal forms, then up
+    until the box's bottom is ``track_lift_gap`` over the belt."""
+    top = layout.belt_top_z + layout.box_size
+    z_over, z_on, z_up = top + config.approach_gap, top - config.press, top + config.track_lift_gap
+    t1 = config.track_descend_time
+    t2 = t1 + config.track_hold_time
+    t3 = t2 + config.track_lift_time
+    tau = dt * np.arange(int(np.ceil(t3 / dt)) + 1)
+    down = z_over + (z_on - z_over) * np.array([smoothstep(u) for u in tau / t1])
+    up = z_on + (z_up - z_on) * np.array([smoothstep(u) for u in (tau - t2) / (t3 - t2)])
+    return np.where(tau <= t1, down, up)
 
 
 class TrackingExpert(SortingExpert):
@@ -249,23 +264,13 @@ class TrackingExpert(SortingExpert):
         return q, (q_next - q) * (v / 0.01)
 
     def _track_path(self, s: Sighting, x0: float, v: float, q0: np.ndarray) -> DensePath:
-        """Down onto the box, hold, and up to carry height, moving with it from ``x0`` [m] at ``v`` [m/s]."""
-        L, cfg, dt = self.layout, self.config, self.dt
-        top = L.belt_top_z + L.box_size
-        z_over, z_on, z_up = top + cfg.approach_gap, top - cfg.press, top + cfg.track_lift_gap
-        t1 = cfg.track_descend_time
-        t2 = t1 + cfg.track_hold_time
-        t3 = t2 + cfg.track_lift_time
+        """Down onto the box, hold, and up off the belt (``track_heights``), moving with it from ``x0`` [m]
+        at ``v`` [m/s]."""
         path, q = [q0], q0
-        for k in range(1, int(np.ceil(t3 / dt)) + 1):
-            tau = k * dt
-            if tau <= t1:
-                z = z_over + (z_on - z_over) * smoothstep(tau / t1)
-            else:
-                z = z_on + (z_up - z_on) * smoothstep((tau - t2) / (t3 - t2))
-            q = self.ik.solve(Waypoint("tracking the box", (x0 - v * tau, s.y, z), s.yaw), q)
+        for k, z in enumerate(track_heights(self.config, self.layout, self.dt)[1:], start=1):
+            q = self.ik.solve(Waypoint("tracking the box", (x0 - v * k * self.dt, s.y, z), s.yaw), q)
             path.append(q)
-        return DensePath(np.array(path), dt)
+        return DensePath(np.array(path), self.dt)
 
     # 3. meet the box, then follow it down, seal and lift
     def _intercept(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
