@@ -20,6 +20,8 @@ INSTALL_REQUIRES = [
     "ruckig>=0.19,<0.20",
     "tqdm>=4.66",
     "av>=15,<16",
+    # --executor ray: collection and evaluation on a Ray cluster (a local one, or one that spans a SLURM job)
+    "ray>=2.50,<3",
     # demos/train_baseline.py plots success against the number of demos:
     "matplotlib>=3.8",
     # robosuite's real run-time needs, for `pip install --no-deps robosuite`:
@@ -57,5 +59,6 @@ setup(
         "colorsort-collect=colorsort.cli.collect:main",
         "colorsort-replay=colorsort.cli.replay:main",
         "colorsort-eval=colorsort.cli.eval:main",
+        "colorsort-slurm=colorsort.cli.slurm:main",
     ]},
 )

@@ -13,7 +13,7 @@ from colorsort.cli.args import parse_image_size
 from colorsort.cli.collect import main
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
-from colorsort.data.shards import split
+from colorsort.executors.base import chunks
 from colorsort.data.store import MARKER
 from colorsort.expert.sorter import SortingExpert
 
@@ -43,7 +43,8 @@ def test_image_size_and_split():
     assert parse_image_size("96") == (96, 96) and parse_image_size("96x128") == (96, 128)
     with pytest.raises(ValueError):
         parse_image_size("big")
-    assert split(list(range(5)), 2) == [[0, 1, 2], [3, 4]] and split([7], 3) == [[7]]
+    assert chunks(list(range(5)), 32, 2) == [[0, 1], [2, 3, 4]] and chunks([7], 32, 3) == [[7]]
+    assert chunks(list(range(5)), 2, 1) == [[0], [1, 2], [3, 4]] and chunks([], 4, 2) == []
 
 
 def test_an_existing_dataset_is_never_overwritten_silently(tiny_dataset, tmp_path, capsys):

@@ -1,14 +1,14 @@
-"""Evaluate a policy on a benchmark variant: episodes by seed, on one or more processes.
+"""Evaluate a policy on benchmark variants: episodes by seed, in jobs spread over an executor.
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``seed + k``), so the same call
-gives the same numbers, whatever ``envs`` (episodes run at once, one process each). The metrics are
-``metrics.py``'s; the command line is ``colorsort-eval`` (``cli/eval.py``).
+gives the same numbers whatever the executor (local processes or Ray), its workers or the job
+size. Each job builds one env and one policy and runs at most ``shard_size`` episodes. The
+metrics are ``metrics.py``'s; the command line is ``colorsort-eval`` (``cli/eval.py``).
 """
 from __future__ import annotations
 
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
+from pathlib import Path
 
 from tqdm import tqdm
 
@@ -16,7 +16,8 @@ from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.cell.cameras import parse_cameras
-from colorsort.logs import quiet_robosuite_info
+from colorsort.executors.base import (DEFAULT_SHARD_SIZE, ExecutorConfig, Task, TaskContext, chunks, forwarded_env,
+                                      make_executor)
 from colorsort.variants import Variant, get_variant
 
 
@@ -60,63 +61,90 @@ class _Runner:
                                         "sorted_times")}}
 
 
-_runner: _Runner | None = None  # the worker process's own, built by _init_worker
+PRELOAD = ("colorsort.benchmark.evaluate",)  # what worker processes import once, before they fork
 
 
-def _init_worker(settings: EvalSettings) -> None:
-    global _runner
-    quiet_robosuite_info()
-    _runner = _Runner(settings)
+@dataclass(frozen=True)
+class EvalJob:
+    """Episodes of one variant, by seed: one task of the executor."""
+
+    settings: EvalSettings
+    seeds: tuple[int, ...]
 
 
-def _run_episode(seed: int) -> dict:
-    return _runner.episode(seed)
+class _Stopped(Exception):
+    """The evaluation was asked to stop."""
 
 
-def run_episodes(settings: EvalSettings, seeds: list[int], envs: int = 1, progress: bool = True) -> list[dict]:
-    """Run one episode per seed, on ``envs`` worker processes (each with its own env and policy).
-
-    Episodes are independent (each starts from its seed), so the results, returned in seed order,
-    are the same whatever ``envs``. Workers start with the ``forkserver`` context: no GL context
-    or policy state crosses a fork.
-    """
-    bar = tqdm(total=len(seeds), desc=f"{settings.policy} on {settings.variant}", unit="episode",
-               disable=not progress)
+def run_job(job: EvalJob, ctx: TaskContext) -> list[dict]:
+    """The task: one env and one policy, the job's episodes in seed order; one message per episode."""
+    runner = _Runner(job.settings)
+    results = []
     try:
-        if envs == 1:
-            runner = _Runner(settings)
-            results = []
-            try:
-                for s in seeds:
-                    results.append(runner.episode(s))
-                    bar.update()
-            finally:
-                runner.env.close()
-            return results
-        context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(["colorsort.benchmark.evaluate"])  # workers fork from a server that imported it once
-        with ProcessPoolExecutor(max_workers=envs, mp_context=context, initializer=_init_worker,
-                                 initargs=(settings,)) as pool:
-            futures = [pool.submit(_run_episode, s) for s in seeds]
-            for _ in as_completed(futures):
-                bar.update()
-            return [f.result() for f in futures]
+        for seed in job.seeds:
+            if ctx.stopping():
+                raise _Stopped(f"stopped before seed {seed}")
+            results.append(runner.episode(seed))
+            ctx.send(job.settings.variant)
+    finally:
+        runner.env.close()
+    return results
+
+
+def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(), progress: bool = True,
+                 desc: str = "evaluating") -> tuple[list[list[dict]], int]:
+    """Run every job on ``executor``; returns each job's episode results (in seed order) and how many
+    jobs ran again because their process died.
+
+    Episodes are independent (each starts from its seed), so the results are the same whatever the
+    executor, its workers or the way seeds are split into jobs.
+
+    Raises:
+        RuntimeError: a job failed (its traceback), or the run was interrupted.
+    """
+    tasks = [Task(f"{j.settings.variant}:{j.seeds[0]}", run_job, j) for j in jobs]
+    bar = tqdm(total=sum(len(j.seeds) for j in jobs), desc=desc, unit="episode", disable=not progress)
+    try:
+        results = make_executor(executor, PRELOAD, forwarded_env()).run(tasks, lambda _: bar.update())
     finally:
         bar.close()
+    failed = [r for r in results if not r.ok]
+    if failed:
+        raise RuntimeError("evaluation stopped: " + "; ".join(r.error or f"{r.key} did not run" for r in failed))
+    return [r.value for r in results], sum(r.attempts > 1 for r in results)
+
+
+def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int, seed: int | None = None,
+                      image_size: tuple[int, int] = (128, 128), cameras: tuple[str, ...] = ("scene", "wrist"),
+                      progress: bool = True, episode_length: int | None = None,
+                      executor: ExecutorConfig = ExecutorConfig(),
+                      shard_size: int = DEFAULT_SHARD_SIZE) -> list[EvalReport]:
+    """``episodes`` episodes of a policy on each variant, all spread over ``executor`` in jobs of at most
+    ``shard_size`` episodes; one report per variant, in order."""
+    check_policy_spec(policy_spec)
+    variants = [get_variant(name) for name in variant_names]
+    path = policy_spec if policy_spec in ("expert", "random") else str(Path(policy_spec).resolve())  # for any worker
+    jobs, owner = [], []
+    per_variant = max(1, executor.workers // len(variants))  # jobs per variant that keep every worker busy
+    for k, variant in enumerate(variants):
+        settings = EvalSettings(path, variant.name, tuple(image_size), tuple(cameras), episode_length)
+        for block in chunks(episode_seeds(variant, episodes, seed), shard_size, per_variant):
+            jobs.append(EvalJob(settings, tuple(block)))
+            owner.append(k)
+    results, _ = run_episodes(jobs, executor, progress, desc=f"{policy_spec} on {', '.join(variant_names)}")
+    per = [[r for job, rs in zip(owner, results) if job == k for r in rs] for k in range(len(variants))]
+    return [aggregate(str(policy_spec), v.name, rs) for v, rs in zip(variants, per)]
 
 
 def evaluate(policy_spec: str, variant_name: str, episodes: int, seed: int | None = None,
              image_size: tuple[int, int] = (128, 128), cameras: tuple[str, ...] = ("scene", "wrist"),
-             progress: bool = True, episode_length: int | None = None, envs: int = 1) -> EvalReport:
-    """Run ``episodes`` episodes of a policy on a variant (on ``envs`` processes) and aggregate the metrics."""
+             progress: bool = True, episode_length: int | None = None, envs: int = 1,
+             executor: ExecutorConfig | None = None, shard_size: int = DEFAULT_SHARD_SIZE) -> EvalReport:
+    """``episodes`` episodes of a policy on one variant, on ``envs`` local processes (or ``executor``)."""
     if envs < 1:
         raise ValueError(f"envs={envs}: give at least 1")
-    variant = get_variant(variant_name)
-    check_policy_spec(policy_spec)
-    seeds = episode_seeds(variant, episodes, seed)
-    settings = EvalSettings(policy_spec, variant.name, tuple(image_size), tuple(cameras), episode_length)
-    results = run_episodes(settings, seeds, min(envs, len(seeds)), progress)
-    return aggregate(str(policy_spec), variant.name, results)
+    return evaluate_variants(policy_spec, [variant_name], episodes, seed, image_size, cameras, progress,
+                             episode_length, executor or ExecutorConfig(workers=envs), shard_size)[0]
 
 
 def observation_settings(policy_spec: str, cameras: str | None,

@@ -13,6 +13,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from colorsort.benchmark.gym_env import ColorSortGymEnv
+from colorsort.data.schema import state_size
+from colorsort.robots import get_robot
+from colorsort.variants import Variant
 
 
 class Policy(Protocol):
@@ -115,6 +118,20 @@ def checkpoint_cameras(path: str | Path) -> tuple[tuple[str, ...], tuple[int, in
         raise ValueError(f"{path}: cameras of different sizes {sorted(sizes)}; ColorSort renders one size")
     (size,) = sizes
     return tuple(images), (int(size[0]), int(size[1]))
+
+
+def misfit(spec: str, variant: Variant) -> str | None:
+    """Why a LeRobot checkpoint cannot run on ``variant`` (its state or action sizes differ), or None."""
+    if spec in ("expert", "random"):
+        return None
+    config = json.loads((Path(spec) / "config.json").read_text())
+    robot = get_robot(variant.robot)
+    wanted = {"observation.state": state_size(robot.n_joints, variant.task_config.tracking),
+              "action": len(robot.action_bounds()[0])}
+    given = {k: f["shape"][0] for k, f in {**config.get("input_features", {}), **config.get("output_features", {})}.items()
+             if k in wanted}
+    bad = {k: (given[k], n) for k, n in wanted.items() if k in given and given[k] != n}
+    return f"sizes (checkpoint, {variant.name}) differ: {bad}" if bad else None
 
 
 def make_policy(spec: str) -> Policy:

@@ -33,6 +33,7 @@ from colorsort.cli.args import parse_image_size
 from colorsort.config import PRESETS
 from colorsort.data.collect import CollectSummary, collect
 from colorsort.data.config import FPS_CHOICES, VCODECS, CollectConfig
+from colorsort.executors.base import EXECUTORS
 from colorsort.logs import quiet_robosuite_info
 from colorsort.robots import ROBOTS
 from colorsort.variants import VARIANTS, get_variant
@@ -57,7 +58,16 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
                         help=f"comma-separated, any of {','.join(CAMERAS)}; 'none' records state only (no videos)")
     parser.add_argument("--image-size", default=str(d.image_size[0]), help="square size or HxW [px]")
     parser.add_argument("--fps", type=int, default=d.fps, help=f"frames per second, one of {FPS_CHOICES}")
-    parser.add_argument("--workers", type=int, default=d.workers, help="recording processes")
+    parser.add_argument("--workers", type=int, default=d.workers,
+                        help="shards recorded at once (processes, or Ray tasks of 1 CPU)")
+    parser.add_argument("--executor", default=d.executor, choices=EXECUTORS,
+                        help="local: processes on this machine; ray: a Ray cluster (see --address)")
+    parser.add_argument("--address", default=None,
+                        help="ray: the cluster to join, e.g. auto (default: start one on this machine)")
+    parser.add_argument("--shard-size", type=int, default=d.shard_size,
+                        help="episodes per shard, at most (fewer where that keeps every worker busy)")
+    parser.add_argument("--retries", type=int, default=d.retries,
+                        help="times a shard is recorded again after its worker process died")
     parser.add_argument("--vcodec", default=d.vcodec, help=f"video codec, one of {VCODECS}")
     parser.add_argument("--resume", action="store_true", help="add the missing episodes to an existing dataset")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset")
@@ -75,6 +85,7 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
             variant=args.variant, seed=args.seed, out=args.out, repo_id=args.repo_id,
             cameras=parse_cameras(args.cameras),
             image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
+            executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
             resume=args.resume, overwrite=args.overwrite)
     except ValueError as err:
         parser.error(str(err))  # exits with status 2
@@ -85,6 +96,9 @@ def print_summary(config: CollectConfig, s: CollectSummary) -> None:
     reasons = ", ".join(f"{k}: {v}" for k, v in sorted(s.not_kept.items())) or "none"
     print(f"episodes this run: tried {s.tried}, kept {s.kept}, not kept {s.tried - s.kept} ({reasons})")
     print(f"recorded {s.sim_time_s:.1f} s of sim time in {s.wall_s:.1f} s: {s.real_time_factor:.2f}x real time")
+    kept = f", {s.shards_kept} kept from the killed run" if s.shards_kept else ""
+    print(f"shards: {s.shards} of at most {config.shard_size} episodes on {config.workers} {s.executor} "
+          f"worker{'s' * (config.workers > 1)}{kept}; retried {s.retried}")
     if s.dataset_episodes:
         print(f"dataset: {s.root}  ({s.dataset_episodes} episodes, {s.dataset_frames} frames at {config.fps} fps, "
               f"{s.size_mb:.1f} MB on disk)")

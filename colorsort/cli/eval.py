@@ -4,15 +4,19 @@ Example::
 
     colorsort-eval --policy expert --variant default --episodes 50 --envs 2 --json outputs/eval.json
     colorsort-eval --policy outputs/train/act/checkpoints/last/pretrained_model --variant jitter --episodes 20
+    colorsort-eval --policy expert --variant all --episodes 50 --executor ray --envs 8
     colorsort-eval --list
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` + k), so the same
-command gives the same numbers, whatever ``--envs`` (episodes run at once, one process each).
+command gives the same numbers, whatever ``--envs`` (episodes run at once), ``--executor`` (local
+processes, or a Ray cluster: a local one, or the one at ``--address``) and ``--shard-size``
+(episodes per job; each job builds one env and one policy). ``--variant all`` runs every
+variant the policy fits (a checkpoint fits those with its robot's state and action sizes).
 Metrics: success rate (every box of the episode where it belongs, none misplaced or dropped) with a 95% Wilson interval; boxes placed correctly, misplaced, dropped;
 distractors (boxes with no bin) let through; boxes per minute (boxes handled right, placed in
 their bin or let through, per minute of sim time); mean cycle time (sim time between consecutive
 boxes handled right).
-Exit status 0 when it ran, 2 for bad arguments.
+Exit status 0 when it ran, 1 when it failed or was interrupted, 2 for bad arguments.
 """
 
 from __future__ import annotations
@@ -23,8 +27,10 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
-from colorsort.benchmark.evaluate import evaluate, observation_settings
+from colorsort.benchmark.evaluate import evaluate_variants, observation_settings
 from colorsort.benchmark.metrics import format_report
+from colorsort.benchmark.policies import misfit
+from colorsort.executors.base import DEFAULT_SHARD_SIZE, EXECUTORS, ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
 from colorsort.variants import VARIANTS, get_variant
 
@@ -34,7 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="colorsort-eval", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--policy", default="expert", help="expert, random, or a LeRobot checkpoint folder")
-    parser.add_argument("--variant", default="default", help="a variant name (see --list)")
+    parser.add_argument("--variant", default="default", help="a variant name (see --list), or all")
     parser.add_argument("--episodes", type=int, default=10, help="episodes to run")
     parser.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's seeds)")
     parser.add_argument("--image-size", type=int, default=None,
@@ -45,7 +51,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--episode-length", type=int, default=None,
                         help="steps before an episode is truncated (default: the variant's time limit)")
     parser.add_argument("--envs", type=int, default=1,
-                        help="episodes run at once, each in its own process (same numbers whatever N)")
+                        help="episodes run at once, each in its own process or Ray task (same numbers whatever N)")
+    parser.add_argument("--executor", default="local", choices=EXECUTORS,
+                        help="local: processes on this machine; ray: a Ray cluster (see --address)")
+    parser.add_argument("--address", default=None,
+                        help="ray: the cluster to join, e.g. auto (default: start one on this machine)")
+    parser.add_argument("--shard-size", type=int, default=DEFAULT_SHARD_SIZE,
+                        help="episodes per job, at most (fewer where that keeps every worker busy)")
+    parser.add_argument("--retries", type=int, default=2, help="times a job runs again after its process died")
     parser.add_argument("--json", default=None, help="write the metrics as JSON here")
     parser.add_argument("--list", action="store_true", help="print the variants, one per line, and exit")
     args = parser.parse_args(argv)
@@ -58,19 +71,39 @@ def main(argv: list[str] | None = None) -> int:
     if args.envs < 1:
         parser.error(f"--envs {args.envs}: give at least 1")
     try:
-        get_variant(args.variant)
+        executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
         cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
-        report = evaluate(args.policy, args.variant, args.episodes, args.seed, image_size, cameras,
-                          episode_length=args.episode_length, envs=args.envs)
+        names = variant_names(args.policy, args.variant)
+        reports = evaluate_variants(args.policy, names, args.episodes, args.seed, image_size, cameras,
+                                    episode_length=args.episode_length, executor=executor, shard_size=args.shard_size)
     except ValueError as err:
         print(f"colorsort-eval: error: {err}", file=sys.stderr)
         return 2
-    print(format_report(report))
+    except RuntimeError as err:
+        print(f"colorsort-eval: {err}", file=sys.stderr)
+        return 1
+    print("\n\n".join(format_report(r) for r in reports))
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(asdict(report), indent=1))
+        found = [asdict(r) for r in reports]
+        Path(args.json).write_text(json.dumps(found if args.variant == "all" else found[0], indent=1))
         print(f"metrics: {args.json}")
     return 0
+
+
+def variant_names(policy: str, variant: str) -> list[str]:
+    """``[variant]``, or for ``all`` every variant the policy fits (the others are named on stderr)."""
+    if variant != "all":
+        get_variant(variant)
+        return [variant]
+    names = []
+    for v in VARIANTS.values():
+        reason = misfit(policy, v)
+        if reason:
+            print(f"colorsort-eval: skipping {v.name}: {reason}", file=sys.stderr)
+        else:
+            names.append(v.name)
+    return names
 
 
 if __name__ == "__main__":

@@ -1,9 +1,10 @@
 """Record the scripted expert's episodes as one LeRobot v3.0 dataset: the whole job.
 
 Episode ``i`` (0 <= i < episodes) runs with env seed ``seed + i``, so a dataset is the same
-whatever the number of workers. ``collect`` checks the output (``store.py``), records the
-missing episodes in one or more shards (``recorder.py``, ``shards.py``), merges them with
-LeRobot's ``aggregate_datasets`` and publishes the result in one rename.
+whatever the executor, the number of workers or the shard size. ``collect`` checks the output
+(``store.py``), records the missing episodes in shards of at most ``shard_size`` episodes on the
+executor (``shards.py``, ``executors/``), merges every finished shard once, in episode order,
+with LeRobot's ``aggregate_datasets`` and publishes the result in one rename.
 """
 
 from __future__ import annotations
@@ -20,12 +21,13 @@ from tqdm import tqdm
 
 from colorsort.data import store
 from colorsort.data.config import CollectConfig
-from colorsort.data.recorder import EpisodeResult, ShardReport, record_shard
-from colorsort.data.shards import merge, merge_in_child, run_workers, split
+from colorsort.data.recorder import EpisodeResult
+from colorsort.data.shards import PRELOAD, ShardJob, merge, merge_in_child, record, report_of, shard_name
+from colorsort.executors.base import Task, TaskResult, chunks, forwarded_env, make_executor
 
-# Set for every recorder (and inherited by worker processes), not at import: the AV1 encoder's banner
-# and info lines off; one progress bar, not one per episode saved; Mesa's CPU renderer draws in the
-# calling thread, with no helper threads competing with the video encoder and other workers for cores.
+# Set for every recorder (and passed to every worker), not at import: the AV1 encoder's banner and info
+# lines off; one progress bar, not one per episode saved; Mesa's CPU renderer draws in the calling
+# thread, with no helper threads competing with the video encoder and other workers for cores.
 RECORDING_ENVIRONMENT = {"SVT_LOG": "1", "HF_DATASETS_DISABLE_PROGRESS_BARS": "1", "LP_NUM_THREADS": "0"}
 
 
@@ -33,18 +35,22 @@ RECORDING_ENVIRONMENT = {"SVT_LOG": "1", "HF_DATASETS_DISABLE_PROGRESS_BARS": "1
 class CollectSummary:
     root: str
     repo_id: str
+    executor: str = "local"
     tried: int = 0  # episodes tried by this run
     kept: int = 0
     not_kept: dict[str, int] = field(default_factory=dict)  # reason -> episodes
     frames: int = 0  # frames recorded by this run (kept episodes)
     sim_time_s: float = 0.0  # [s] sim time recorded by this run (kept episodes)
+    shards: int = 0  # shards this run recorded (or tried to)
+    shards_kept: int = 0  # finished shards of an earlier, killed run that --resume kept
+    retried: int = 0  # shards run again because their worker process died
     dataset_episodes: int = 0  # in the dataset at the end, earlier runs included
     dataset_frames: int = 0
     wall_s: float = 0.0
     size_mb: float = 0.0
     interrupted: bool = False
     errors: list[str] = field(default_factory=list)
-    seconds: dict[str, float] = field(default_factory=dict)  # summed over workers, plus "merging"
+    seconds: dict[str, float] = field(default_factory=dict)  # summed over shards, plus "merging"
 
     @property
     def real_time_factor(self) -> float:
@@ -56,62 +62,86 @@ def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], N
     """Record, merge and report, as the module docstring says.
 
     Raises:
-        FileExistsError: the output exists and neither --resume nor --overwrite was given.
-        ValueError: --resume on a dataset recorded with other settings.
+        FileExistsError: the output (or a killed run's staging folder) exists and neither --resume
+            nor --overwrite was given.
+        ValueError: --resume on a dataset, or a killed run's shards, recorded with other settings.
     """
     for key, value in RECORDING_ENVIRONMENT.items():
         os.environ.setdefault(key, value)
     start = time.perf_counter()
     root = Path(config.out).resolve()
     marker = store.check_output(config, root)
+    summary = CollectSummary(str(root), config.repo_id, config.executor)
+    staging, run = store.open_staging(config, root, log)
+    for path in store.unfinished_shards(staging):
+        log(f"discarding {path.name}: its worker was killed while recording it")
+        shutil.rmtree(path)
+    earlier = store.finished_shards(staging)
+    store.check_shards(earlier, run, config, set(marker["tried"]) if marker else set())
+    summary.shards_kept = len(earlier)
     tried = set(marker["tried"]) if marker else set()
     failed = dict(marker.get("failed", {})) if marker else {}
+    for _, m in earlier:
+        tried.update(m["tried"])
+        failed.update(m["failed"])
     todo = [i for i in range(config.episodes) if i not in tried]
-    summary = CollectSummary(str(root), config.repo_id)
-    if marker and not todo:
+    if marker and not todo and not earlier:
+        shutil.rmtree(staging)
         log(f"{root} already holds all {config.episodes} episodes tried; nothing to do")
         return summary
-    staging = store.fresh_staging(root, log)
-    blocks = split(todo, min(config.workers, len(todo)))
-    shards: list[ShardReport] = []
+
+    blocks = chunks(todo, config.shard_size, config.workers)
+    tasks = [Task(shard_name(b[0]), record, ShardJob(config, tuple(b), str(staging / shard_name(b[0])), run))
+             for b in blocks]
+    summary.shards = len(tasks)
+    executor = make_executor(config.executor_config, PRELOAD, forwarded_env(RECORDING_ENVIRONMENT))
     bar = tqdm(total=len(todo), unit="episode", desc="recording", disable=not progress, smoothing=0.1)
+    done_shards = []
 
     def on_episode(r: EpisodeResult) -> None:
-        tried.add(r.index)
         summary.tried += 1
         if r.kept:
             summary.kept += 1
             summary.frames += r.frames
             summary.sim_time_s += r.sim_time_s
         else:
-            failed[str(r.index)] = r.reason
             summary.not_kept[r.reason] = summary.not_kept.get(r.reason, 0) + 1
         bar.update(1)
-        bar.set_postfix(kept=summary.kept, not_kept=summary.tried - summary.kept)
+        bar.set_postfix(kept=summary.kept, not_kept=summary.tried - summary.kept,
+                        shards=f"{len(done_shards)}/{len(tasks)}")
+
+    def on_shard(result: TaskResult) -> None:
+        done_shards.append(result.key)
+        bar.set_postfix(kept=summary.kept, not_kept=summary.tried - summary.kept,
+                        shards=f"{len(done_shards)}/{len(tasks)}")
 
     try:
-        if len(blocks) == 1:
-            shards.append(record_shard(config, blocks[0], staging / "shard-00", on_episode))
-        else:
-            shards = run_workers(config, blocks, staging, on_episode, log)
+        results = executor.run(tasks, on_episode, on_shard) if tasks else []
     finally:
         bar.close()
-    summary.interrupted = any(s.interrupted for s in shards)
-    summary.errors = [s.error for s in shards if s.error]
-    for s in shards:
-        for key, value in s.seconds.items():
+    summary.retried = sum(r.attempts > 1 for r in results)
+    summary.interrupted = any(r.attempts == 0 or (r.value and r.value.interrupted) for r in results)
+    summary.errors = [r.error or r.value.error for r in results if r.error or (r.value and r.value.error)]
+    for r in results:
+        for key, value in (r.value.seconds if r.value else {}).items():
             summary.seconds[key] = summary.seconds.get(key, 0.0) + value
 
     t = time.perf_counter()
-    sources = ([root] if marker else []) + [Path(s.root) for s in shards if s.kept]
-    if any(s.kept for s in shards):
+    shards = store.finished_shards(staging)  # on disk: what every attempt, of this run or a killed one, finished
+    store.check_shards(shards, run, config, set(marker["tried"]) if marker else set())
+    for _, m in shards:
+        tried.update(m["tried"])
+        failed.update(m["failed"])
+    reports = [report_of(p, m) for p, m in shards]
+    sources = ([root] if marker else []) + [Path(s.root) for s in reports if s.kept]
+    if any(s.kept for s in reports):
         merged = staging / "merged"
-        (merge_in_child if len(shards) > 1 else merge)(sources, merged, config.repo_id)
-        kept = (marker["episodes"] if marker else []) + [i for s in shards for i in s.kept]
-        layout = next((s.sim_state for s in shards if s.sim_state), None)
-        record = {"settings": config.settings(), "episodes": kept, "tried": sorted(tried), "failed": failed,
-                  "sim_state": layout}
-        store.publish(merged, root, staging, record)
+        (merge if config.executor == "local" and config.workers == 1 else merge_in_child)(sources, merged, config.repo_id)
+        kept = (marker["episodes"] if marker else []) + [i for s in reports for i in s.kept]
+        layout = next((s.sim_state for s in reports if s.sim_state), None)
+        record_ = {"settings": config.settings(), "episodes": kept, "tried": sorted(tried), "failed": failed,
+                   "sim_state": layout}
+        store.publish(merged, root, staging, record_)
     elif marker:  # nothing new kept: still remember what was tried
         marker.update(tried=sorted(tried), failed=failed)
         (root / store.MARKER).write_text(json.dumps(marker))

@@ -6,6 +6,7 @@ from dataclasses import asdict, dataclass
 
 from colorsort.cell.cameras import CAMERAS
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
+from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.robots import get_robot
 from colorsort.variants import get_variant
 
@@ -28,7 +29,11 @@ class CollectConfig:
     cameras: tuple[str, ...] = ("scene", "wrist")  # stored as observation.images.<camera>; () records state only
     image_size: tuple[int, int] = (128, 128)  # (height, width) of every camera [px]
     fps: int = 20  # frames per second = the env's control rate [Hz]
-    workers: int = 1  # processes recording shards side by side
+    workers: int = 1  # shards recorded side by side (local processes, or Ray tasks of 1 CPU)
+    executor: str = "local"  # "local" (processes on this machine) or "ray" (executors.base.EXECUTORS)
+    shard_size: int = DEFAULT_SHARD_SIZE  # episodes per shard, at most (fewer where needed to busy every worker)
+    retries: int = 2  # re-runs of a shard whose worker process died
+    address: str | None = None  # ray only: the cluster to join ("auto"); None starts one on this machine
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
@@ -51,7 +56,8 @@ class CollectConfig:
             raise ValueError(f"Unknown vcodec {self.vcodec!r}. Valid codecs: {list(VCODECS)}")
         check_range("episodes", self.episodes, 1, 1_000_000)
         check_range("boxes_per_episode", self.boxes_per_episode, 1, 100)
-        check_range("workers", self.workers, 1, 64)
+        self.executor_config  # noqa: B018 - validates executor, workers, retries and address
+        check_range("shard_size", self.shard_size, 1, 100_000)
         if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
             raise ValueError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
         if self.seed < 0:
@@ -63,6 +69,10 @@ class CollectConfig:
         """The settings every episode of one dataset must share (checked on --resume)."""
         keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps", "vcodec")
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
+
+    @property
+    def executor_config(self) -> ExecutorConfig:
+        return ExecutorConfig(self.executor, self.workers, self.retries, self.address)
 
     @property
     def task_config(self) -> TaskConfig:

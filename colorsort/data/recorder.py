@@ -41,7 +41,9 @@ class ShardReport:
     """What one recorder did, and where its wall time went [s]."""
 
     root: str
+    tried: list[int] = field(default_factory=list)  # episode numbers run to the end, in order
     kept: list[int] = field(default_factory=list)  # episode numbers saved, in order
+    failed: dict[str, str] = field(default_factory=dict)  # episode number -> why it was not kept
     interrupted: bool = False
     error: str | None = None
     seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(STAGES, 0.0))
@@ -89,7 +91,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     dataset = LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
         robot_type=config.robot, use_videos=True, video_backend="pyav", rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec),
-        streaming_encoding=True, encoder_queue_maxsize=10_000, encoder_threads=1 if config.workers > 1 else None,
+        streaming_encoding=True, encoder_queue_maxsize=10_000, encoder_threads=1 if config.workers > 1 or config.executor != "local" else None,
     )
     sec["setup"] += time.perf_counter() - t0
     limit = episode_time_limit(config)
@@ -126,6 +128,8 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                 out.kept.append(index)
             else:
                 dataset.clear_episode_buffer()
+                out.failed[str(index)] = reason
+            out.tried.append(index)
             sec["episode saving"] += time.perf_counter() - t
             report(EpisodeResult(index, seed, reason == "ok", reason, frames, frames / config.fps))
     except (KeyboardInterrupt, _Stopped):

@@ -1,85 +1,73 @@
-"""Recording in several processes: episode numbers split into contiguous shards, one worker each.
+"""Shards: collection's unit of work, each a complete LeRobot dataset of a few dozen episodes.
 
-Workers fork from a ``forkserver`` that imported the recorder and lerobot (seconds of torch) once
-and has never opened a GL context; each worker opens its own. Ctrl-C goes to the parent, which
-asks the workers to stop through an event: each finalizes what it saved.
+A shard records its episodes into ``<staging>/shard-NNNNNN`` (NNNNNN: its first episode number),
+finalizes that dataset as soon as its last episode is saved, then writes its marker
+``meta/colorsort-shard.json``: the run it belongs to, the settings, the episodes it tried and kept,
+and why the others were not kept. A shard with no marker was killed while recording; it is
+discarded and its episodes are recorded again. Beside each shard, ``shard-NNNNNN.worker.json``
+says which process (host, pid) records it, and which attempt that is. The shards are merged once,
+at the end, with LeRobot's ``aggregate_datasets``, in episode order.
 """
 
 from __future__ import annotations
 
+import json
 import multiprocessing as mp
-import queue
+import os
 import shutil
-import signal
-import traceback
+import socket
+import time
+from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable
-
-import numpy as np
 
 from colorsort.data.config import CollectConfig
-from colorsort.data.recorder import EpisodeResult, ShardReport, record_shard
-from colorsort.logs import quiet_robosuite_info
+from colorsort.data.recorder import ShardReport, record_shard
+from colorsort.data.store import SHARD_MARKER, read_shard
+from colorsort.executors.base import TaskContext
+
+# What worker processes import once, before they fork (seconds of torch):
+PRELOAD = ("colorsort.data.shards", "lerobot.datasets.lerobot_dataset", "lerobot.datasets.aggregate")
 
 
-def split(indices: list[int], parts: int) -> list[list[int]]:
-    """``indices`` in ``parts`` contiguous blocks, sizes differing by at most one."""
-    sizes = [len(indices) // parts + (k < len(indices) % parts) for k in range(parts)]
-    starts = np.cumsum([0] + sizes)
-    return [indices[starts[k] : starts[k + 1]] for k in range(parts) if sizes[k] > 0]
+@dataclass(frozen=True)
+class ShardJob:
+    """One shard to record: episodes ``indices`` of ``config`` into ``root``, for run ``run``."""
+
+    config: CollectConfig
+    indices: tuple[int, ...]
+    root: str  # absolute: workers may run elsewhere, on a shared file system
+    run: str
 
 
-def context():
-    """The multiprocessing context workers (and the merge) run in."""
-    ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["colorsort.data.recorder", "lerobot.datasets.lerobot_dataset",
-                                "lerobot.datasets.aggregate"])
-    return ctx
+def shard_name(first: int) -> str:
+    return f"shard-{first:06d}"
 
 
-def _worker(config: CollectConfig, indices: list[int], root: str, messages, stop_event) -> None:
-    """A recording process: Ctrl-C goes to the parent, which asks it to stop through ``stop_event``."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    quiet_robosuite_info()
-    try:
-        shard = record_shard(config, indices, Path(root), lambda r: messages.put(("episode", r)), stop_event.is_set)
-    except BaseException:  # noqa: BLE001 - e.g. the env could not be built
-        shard = ShardReport(root, error=traceback.format_exc())
-    messages.put(("shard", shard))
+def report_of(root: Path, marker: dict) -> ShardReport:
+    return ShardReport(str(root), tried=marker["tried"], kept=marker["kept"], failed=marker["failed"],
+                       interrupted=marker["interrupted"], error=marker["error"], seconds=marker["seconds"],
+                       sim_state=marker["sim_state"])
 
 
-def run_workers(config: CollectConfig, blocks: list[list[int]], staging: Path,
-                on_episode: Callable[[EpisodeResult], None], log: Callable[[str], None]) -> list[ShardReport]:
-    """Record ``blocks`` side by side into ``staging/shard-KK``; returns the shards' reports, in order."""
-    ctx = context()
-    messages, stop_event = ctx.Queue(), ctx.Event()
-    procs = [ctx.Process(target=_worker, args=(config, b, str(staging / f"shard-{k:02d}"), messages, stop_event),
-                        daemon=False) for k, b in enumerate(blocks)]
-    for p in procs:
-        p.start()
-    shards: dict[str, ShardReport] = {}
-    while len(shards) < len(procs):
-        try:
-            kind, payload = messages.get(timeout=0.5)
-        except queue.Empty:
-            dead = [p for p in procs if not p.is_alive() and p.exitcode not in (0, None)]
-            if dead and messages.empty():
-                for k, p in enumerate(procs):
-                    root = str(staging / f"shard-{k:02d}")
-                    if not p.is_alive() and root not in shards and p.exitcode != 0:
-                        shards[root] = ShardReport(root, error=f"worker {k} died with exit code {p.exitcode}")
-            continue
-        except KeyboardInterrupt:
-            log("stopping: the workers finish saving what they recorded ...")
-            stop_event.set()
-            continue
-        if kind == "episode":
-            on_episode(payload)
-        else:
-            shards[payload.root] = payload
-    for p in procs:
-        p.join()
-    return [shards[str(staging / f"shard-{k:02d}")] for k in range(len(procs))]
+def record(job: ShardJob, ctx: TaskContext) -> ShardReport:
+    """The task that records one shard (run again after its process died: it starts the shard afresh)."""
+    root = Path(job.root)
+    marker = read_shard(root)
+    if marker is not None:  # an earlier attempt finished it and then died
+        return report_of(root, marker)
+    if root.exists():
+        shutil.rmtree(root)  # what an attempt killed while recording left
+    worker = root.with_name(root.name + ".worker.json")
+    attempt = json.loads(worker.read_text())["attempt"] + 1 if worker.is_file() else 1
+    worker.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid(), "attempt": attempt,
+                                  "started": time.time()}))
+    report = record_shard(job.config, list(job.indices), root, ctx.send, ctx.stopping)
+    record_ = {"run": job.run, "settings": job.config.settings(), "indices": list(job.indices),
+               **{k: v for k, v in asdict(report).items() if k != "root"}}
+    tmp = root / (SHARD_MARKER + ".tmp")
+    tmp.write_text(json.dumps(record_))
+    tmp.rename(root / SHARD_MARKER)  # the marker appears whole, or not at all
+    return report
 
 
 def merge(sources: list[Path], dest: Path, repo_id: str) -> None:
@@ -100,8 +88,10 @@ def merge(sources: list[Path], dest: Path, repo_id: str) -> None:
 
 
 def merge_in_child(sources: list[Path], dest: Path, repo_id: str) -> None:
-    """``merge`` in a worker process: the parent never has to import lerobot."""
-    p = context().Process(target=merge, args=(sources, dest, repo_id))
+    """``merge`` in a child process: the caller never has to import lerobot (seconds of torch)."""
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(list(PRELOAD))
+    p = ctx.Process(target=merge, args=(sources, dest, repo_id))
     p.start()
     p.join()
     if p.exitcode != 0:

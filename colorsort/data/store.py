@@ -4,17 +4,22 @@ The output directory only ever holds a complete dataset: shards are recorded in 
 folder beside it (``.<name>.staging``) and the merged result replaces the output in one rename.
 ``meta/colorsort.json`` (the marker) keeps the settings, the episode number of each dataset
 episode in order, every episode number tried, why failed ones failed, and the sim-state layout.
+The staging folder outlives a run that was killed: its ``run.json`` names the run (an id and the
+settings) that its finished shards belong to, and ``--resume`` keeps them.
 """
 
 from __future__ import annotations
 
 import json
 import shutil
+import uuid
 from pathlib import Path
 
 from colorsort.data.config import CollectConfig
 
 MARKER = "meta/colorsort.json"  # the collector's record: settings and the episodes tried
+RUN_FILE = "run.json"  # in the staging folder: the run its shards belong to
+SHARD_MARKER = "meta/colorsort-shard.json"  # in a shard: written once it is finished
 
 
 def read_marker(root: Path) -> dict | None:
@@ -50,14 +55,36 @@ def check_output(config: CollectConfig, root: Path) -> dict | None:
     return marker
 
 
-def fresh_staging(root: Path, log) -> Path:
-    """An empty staging folder beside ``root`` (one left by a killed run is removed, and said so)."""
+def open_staging(config: CollectConfig, root: Path, log) -> tuple[Path, str]:
+    """The staging folder beside ``root`` and its run id: the one a killed run left, on --resume;
+    else a new one (a killed run's folder with no finished shard in it is removed, and said so).
+
+    Raises:
+        FileExistsError: a killed run left finished shards and neither --resume nor --overwrite was given.
+        ValueError: --resume with other settings than the killed run's.
+    """
     staging = root.parent / f".{root.name}.staging"
+    run_file = staging / RUN_FILE
     if staging.exists():
+        done = finished_shards(staging)
+        if config.resume and run_file.is_file():
+            run = json.loads(run_file.read_text())
+            if run["settings"] != config.settings():
+                diff = {k: (run["settings"].get(k), v) for k, v in config.settings().items()
+                        if run["settings"].get(k) != v}
+                raise ValueError(f"Cannot resume the run in {staging} with other settings (recorded, requested): {diff}")
+            return staging, run["run"]
+        if done and not config.overwrite:
+            episodes = sum(len(m["kept"]) for _, m in done)
+            raise FileExistsError(f"{staging} holds {len(done)} finished shards ({episodes} episodes kept) of a run "
+                                  "that was killed. Pass --resume to keep them and record the rest, or --overwrite "
+                                  "to discard them")
         log(f"removing {staging}, left by a run that was killed")
         shutil.rmtree(staging)
     staging.mkdir(parents=True)
-    return staging
+    run = uuid.uuid4().hex[:12]
+    run_file.write_text(json.dumps({"run": run, "settings": config.settings()}))
+    return staging, run
 
 
 def publish(merged: Path, root: Path, staging: Path, record: dict) -> None:
@@ -71,3 +98,38 @@ def publish(merged: Path, root: Path, staging: Path, record: dict) -> None:
 
 def dir_size_mb(root: Path) -> float:
     return sum(f.stat().st_size for f in root.rglob("*") if f.is_file()) / 1e6
+
+
+def read_shard(root: Path) -> dict | None:
+    """A finished shard's marker; None while it is unfinished (or was killed)."""
+    path = Path(root) / SHARD_MARKER
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def finished_shards(staging: Path) -> list[tuple[Path, dict]]:
+    """The finished shards in ``staging`` with their markers, in episode order."""
+    found = [(p, read_shard(p)) for p in sorted(Path(staging).glob("shard-*")) if p.is_dir()]
+    return [(p, m) for p, m in found if m is not None]
+
+
+def unfinished_shards(staging: Path) -> list[Path]:
+    return [p for p in sorted(Path(staging).glob("shard-*")) if p.is_dir() and read_shard(p) is None]
+
+
+def check_shards(shards: list[tuple[Path, dict]], run: str, config: CollectConfig, in_dataset: set[int]) -> None:
+    """ValueError for a shard that is not this run's: another run id, other settings, or episodes that
+    the dataset or another shard already holds."""
+    seen = set(in_dataset)
+    for path, marker in shards:
+        if marker["run"] != run:
+            raise ValueError(f"{path} was recorded by run {marker['run']}, not by run {run} that this staging "
+                             "folder belongs to: it comes from another run; move it away")
+        if marker["settings"] != config.settings():
+            diff = {k: (marker["settings"].get(k), v) for k, v in config.settings().items()
+                    if marker["settings"].get(k) != v}
+            raise ValueError(f"{path} was recorded with other settings (recorded, requested): {diff}")
+        twice = seen & set(marker["tried"])
+        if twice:
+            raise ValueError(f"{path} holds episodes {sorted(twice)} that the dataset or another shard already "
+                             "holds: it comes from another run; move it away")
+        seen |= set(marker["tried"])

@@ -1,0 +1,101 @@
+"""One interface over the engines that run tasks: local processes and Ray.
+
+A task is a top-level function ``fn(arg, ctx)`` and its argument, both picklable; ``ctx.send(m)``
+reports progress to the caller (``on_message``), ``ctx.stopping()`` turns true when the caller was
+asked to stop (Ctrl-C). An executor runs the tasks, at most ``workers`` at once; a task whose
+process died (SIGKILL, out of memory, a node lost) runs again, up to ``retries`` times; an
+exception raised by the task is its result, not retried (it would raise again).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Any, Callable, Protocol
+
+from colorsort.config import check_range
+
+EXECUTORS = ("local", "ray")
+DEFAULT_SHARD_SIZE = 32  # episodes per task: a few dozen, so a cluster merges hundreds of shards, not thousands
+# Passed on to every worker, on this machine or a cluster's: rendering, offline hub, LeRobot's cache.
+FORWARDED_ENV = ("MUJOCO_GL", "PYOPENGL_PLATFORM", "HF_HUB_OFFLINE", "HF_HOME", "HF_LEROBOT_HOME")
+
+
+@dataclass(frozen=True)
+class ExecutorConfig:
+    """Which engine runs the tasks, and how many at once."""
+
+    name: str = "local"  # "local": processes on this machine; "ray": a Ray cluster
+    workers: int = 1  # tasks run at once (local: processes; ray: tasks of 1 CPU each)
+    retries: int = 2  # re-runs of a task whose process died
+    address: str | None = None  # ray only: a cluster to join ("auto", "ray://head:10001"); None starts one here
+
+    def __post_init__(self) -> None:
+        if self.name not in EXECUTORS:
+            raise ValueError(f"Unknown executor {self.name!r}. Valid executors: {list(EXECUTORS)}")
+        check_range("workers", self.workers, 1, 100_000)
+        check_range("retries", self.retries, 0, 100)
+        if self.address is not None and self.name != "ray":
+            raise ValueError(f"address={self.address!r} is for the ray executor; got executor {self.name!r}")
+
+
+@dataclass(frozen=True)
+class Task:
+    key: str  # names the task in errors, e.g. "shard-000032"
+    fn: Callable[[Any, "TaskContext"], Any]  # a module-level function
+    arg: Any
+
+
+@dataclass
+class TaskResult:
+    key: str
+    value: Any = None  # what fn returned
+    error: str | None = None  # its traceback, or why its process died
+    attempts: int = 0  # times it started (0: never ran, the run was stopped first)
+
+    @property
+    def ok(self) -> bool:
+        return self.attempts > 0 and self.error is None
+
+
+class TaskContext(Protocol):
+    def send(self, message: Any) -> None: ...
+
+    def stopping(self) -> bool: ...
+
+
+class Executor(Protocol):
+    config: ExecutorConfig
+
+    def run(self, tasks: list[Task], on_message: Callable[[Any], None] = lambda m: None,
+            on_done: Callable[[TaskResult], None] = lambda r: None) -> list[TaskResult]:
+        """Run ``tasks``; returns their results in the tasks' order."""
+        ...
+
+
+def chunks(items: list, size: int, workers: int = 1) -> list[list]:
+    """``items`` in contiguous blocks of at most ``size``, and at least ``min(workers, len(items))`` blocks
+    (so that a small job still keeps every worker busy), sizes differing by at most one."""
+    check_range("shard size", size, 1, 1_000_000)
+    parts = max(-(-len(items) // size), min(workers, len(items)))
+    bounds = [len(items) * k // parts for k in range(parts + 1)] if items else [0]
+    return [items[bounds[k]:bounds[k + 1]] for k in range(len(bounds) - 1)]
+
+
+def forwarded_env(extra: dict[str, str] | None = None) -> dict[str, str]:
+    """The environment variables workers get: ``FORWARDED_ENV`` as set here, plus ``extra``."""
+    env = {k: os.environ[k] for k in FORWARDED_ENV if k in os.environ}
+    env.update(extra or {})
+    return env
+
+
+def make_executor(config: ExecutorConfig, preload: tuple[str, ...] = (), env: dict[str, str] | None = None) -> Executor:
+    """The executor ``config`` names. ``preload``: modules local workers import once, before forking;
+    ``env``: variables every worker gets (``forwarded_env``)."""
+    if config.name == "ray":
+        from colorsort.executors.ray import RayExecutor
+
+        return RayExecutor(config, env or {})
+    from colorsort.executors.local import LocalExecutor
+
+    return LocalExecutor(config, preload)

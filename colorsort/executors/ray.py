@@ -1,0 +1,98 @@
+"""Tasks on a Ray cluster: ``ray.init()`` starts one on this machine, or joins ``address`` ("auto" for
+the cluster this node belongs to, as on a SLURM allocation that ran ``ray start``).
+
+Each task takes 1 CPU; Ray runs a task again when its worker process or node dies (``max_retries``),
+never on an exception of the task itself. Tasks report through one ``ray.util.queue.Queue``; a
+"start" message per attempt is how retries are counted. Ctrl-C cancels the tasks: a running one
+gets KeyboardInterrupt and returns what it finished. Workers must have colorsort installed, at the
+same version, and see the same file system for the paths they are given.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from colorsort.executors.base import ExecutorConfig, Task, TaskResult
+
+
+@dataclass
+class _Context:
+    queue: Any
+    key: str
+
+    def send(self, message: Any) -> None:
+        self.queue.put(("message", self.key, message))
+
+    def stopping(self) -> bool:
+        return False  # Ray cancels a task by raising KeyboardInterrupt in it
+
+
+def _entry(task: Task, queue) -> Any:
+    from colorsort.logs import quiet_robosuite_info
+
+    quiet_robosuite_info()
+    queue.put(("start", task.key, None))
+    return task.fn(task.arg, _Context(queue, task.key))
+
+
+class RayExecutor:
+    def __init__(self, config: ExecutorConfig, env: dict[str, str]):
+        self.config, self.env = config, env
+
+    def run(self, tasks: list[Task], on_message: Callable[[Any], None] = lambda m: None,
+            on_done: Callable[[TaskResult], None] = lambda r: None) -> list[TaskResult]:
+        import ray
+        from ray.util.queue import Queue
+
+        started_here = not ray.is_initialized()
+        if started_here:
+            ray.init(address=self.config.address, runtime_env={"env_vars": self.env}, include_dashboard=False,
+                     logging_level=logging.WARNING)
+        queue = Queue()
+        remote = ray.remote(_entry).options(num_cpus=1, max_retries=self.config.retries, retry_exceptions=False)
+        results = [TaskResult(t.key) for t in tasks]
+        index = {t.key: i for i, t in enumerate(tasks)}
+        pending, running = deque(range(len(tasks))), {}
+
+        def drain() -> None:
+            for kind, key, payload in queue.get_nowait_batch(queue.qsize()):
+                if kind == "start":
+                    results[index[key]].attempts += 1
+                else:
+                    on_message(payload)
+
+        def finish(ref) -> None:
+            i = running.pop(ref)
+            try:
+                results[i].value = ray.get(ref)
+            except (ray.exceptions.RayError, KeyboardInterrupt) as err:
+                results[i].error = f"{tasks[i].key}: {err}"
+            on_done(results[i])
+
+        try:
+            while pending or running:
+                while pending and len(running) < self.config.workers:
+                    i = pending.popleft()
+                    running[remote.remote(tasks[i], queue)] = i
+                done, _ = ray.wait(list(running), num_returns=len(running), timeout=0.5)
+                drain()
+                for ref in done:
+                    finish(ref)
+        except KeyboardInterrupt:
+            for ref in running:
+                ray.cancel(ref)
+            deadline = time.monotonic() + 120  # a cancelled task finalizes what it recorded
+            while running and time.monotonic() < deadline:
+                done, _ = ray.wait(list(running), num_returns=len(running), timeout=1.0)
+                for ref in done:
+                    finish(ref)
+        finally:
+            drain()
+            queue.shutdown()
+            if started_here:
+                ray.shutdown()
+        return results
