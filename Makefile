@@ -46,6 +46,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_tracking.py --seeds 10 --boxes 20
 	$(VENV)/bin/python demos/bench_seal.py
 	$(VENV)/bin/python demos/bench_collect.py --episodes 48
+	$(VENV)/bin/python demos/bench_scale.py
 	$(VENV)/bin/python demos/bench_eval.py
 	$(VENV)/bin/python demos/bench_suite.py --episodes 10
 

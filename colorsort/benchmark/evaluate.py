@@ -110,7 +110,7 @@ def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(
         bar.close()
     failed = [r for r in results if not r.ok]
     if failed:
-        raise RuntimeError("evaluation stopped: " + "; ".join(r.error or f"{r.key} did not run" for r in failed))
+        raise RuntimeError("evaluation stopped: " + "; ".join(r.error or f"{r.key} was stopped" for r in failed))
     return [r.value for r in results], sum(r.attempts > 1 for r in results)
 
 

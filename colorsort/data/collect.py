@@ -120,7 +120,7 @@ def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], N
     finally:
         bar.close()
     summary.retried = sum(r.attempts > 1 for r in results)
-    summary.interrupted = any(r.attempts == 0 or (r.value and r.value.interrupted) for r in results)
+    summary.interrupted = any(r.stopped or (r.value and r.value.interrupted) for r in results)
     summary.errors = [r.error or r.value.error for r in results if r.error or (r.value and r.value.error)]
     for r in results:
         for key, value in (r.value.seconds if r.value else {}).items():

@@ -51,11 +51,12 @@ class TaskResult:
     key: str
     value: Any = None  # what fn returned
     error: str | None = None  # its traceback, or why its process died
-    attempts: int = 0  # times it started (0: never ran, the run was stopped first)
+    attempts: int = 0  # times it started
+    stopped: bool = False  # the caller stopped the run (Ctrl-C) before this task returned, or before it started
 
     @property
     def ok(self) -> bool:
-        return self.attempts > 0 and self.error is None
+        return self.attempts > 0 and self.error is None and not self.stopped
 
 
 class TaskContext(Protocol):

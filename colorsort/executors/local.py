@@ -12,7 +12,6 @@ import multiprocessing as mp
 import os
 import signal
 import threading
-import time
 import traceback
 from collections import deque
 from dataclasses import dataclass
@@ -29,19 +28,20 @@ class _Context:
     stopping: Callable[[], bool]
 
 
-def _exit_with_parent() -> None:
-    """End this process when its parent (the forkserver, which ends with the caller) is gone: a caller
-    killed outright leaves no worker writing on behind it."""
-    parent = os.getppid()
-    while os.getppid() == parent:
-        time.sleep(0.5)
+def _exit_with_caller(pipe) -> None:
+    """End this process as soon as the caller's end of ``pipe`` closes (the caller never sends on it):
+    a caller killed outright leaves no worker writing on behind it."""
+    try:
+        pipe.poll(None)
+    except (OSError, EOFError):
+        pass
     os._exit(1)
 
 
 def _entry(task: Task, pipe, stop_event) -> None:
     """A task's process: its result, or its traceback, goes back through ``pipe``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    threading.Thread(target=_exit_with_parent, daemon=True).start()
+    threading.Thread(target=_exit_with_caller, args=(pipe,), daemon=True).start()
     quiet_robosuite_info()
     try:
         pipe.send(("result", task.fn(task.arg, _Context(lambda m: pipe.send(("message", m)), stop_event.is_set))))
@@ -76,7 +76,7 @@ class LocalExecutor:
         results = []
         try:
             for task in tasks:
-                result = TaskResult(task.key)
+                result = TaskResult(task.key, stopped=bool(stop))
                 if not stop:
                     result.attempts = 1
                     try:
@@ -101,14 +101,16 @@ class LocalExecutor:
             try:
                 while pending and len(running) < self.config.workers and not stop_event.is_set():
                     i = pending.popleft()
-                    reader, writer = ctx.Pipe(duplex=False)
+                    reader, writer = ctx.Pipe()  # duplex: the task sees this end close if the caller dies
                     process = ctx.Process(target=_entry, args=(tasks[i], writer, stop_event), daemon=False)
                     process.start()
                     writer.close()
                     running[i] = (process, reader)
                     results[i].attempts += 1
                 if stop_event.is_set():
-                    pending.clear()  # never started: not run
+                    for i in pending:  # never started
+                        results[i].stopped = True
+                    pending.clear()
                 wait([r for _, r in running.values()] + [p.sentinel for p, _ in running.values()], timeout=1.0)
                 for i, (process, reader) in list(running.items()):
                     finished = self._drain(reader, results[i], on_message)

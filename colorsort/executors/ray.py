@@ -69,7 +69,9 @@ class RayExecutor:
             i = running.pop(ref)
             try:
                 results[i].value = ray.get(ref)
-            except (ray.exceptions.RayError, KeyboardInterrupt) as err:
+            except ray.exceptions.TaskCancelledError:
+                results[i].stopped = True
+            except ray.exceptions.RayError as err:
                 results[i].error = f"{tasks[i].key}: {err}"
             on_done(results[i])
 
@@ -83,6 +85,8 @@ class RayExecutor:
                 for ref in done:
                     finish(ref)
         except KeyboardInterrupt:
+            for i in pending:
+                results[i].stopped = True
             for ref in running:
                 ray.cancel(ref)
             deadline = time.monotonic() + 120  # a cancelled task finalizes what it recorded

@@ -1,0 +1,179 @@
+"""Collection and evaluation on executors: the same data and numbers on local processes and on Ray,
+whatever the shard size; a worker killed outright loses at most its shard; --resume after any
+crash completes the dataset with every episode once. One Ray cluster (2 CPUs) for the module."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from colorsort.benchmark.evaluate import evaluate
+from colorsort.data.collect import collect
+from colorsort.data.config import CollectConfig
+from colorsort.data.store import MARKER, SHARD_MARKER
+from colorsort.executors.base import ExecutorConfig
+
+ray = pytest.importorskip("ray")
+
+# Four state-only episodes of two boxes each: long enough (seconds per episode) to kill a worker mid-shard.
+SCALE = dict(episodes=4, boxes_per_episode=2, cameras=(), shard_size=2)
+QUIET = dict(progress=False, log=lambda _: None)
+
+
+def frames(root: Path) -> dict:
+    """Every frame's columns, in dataset order."""
+    tables = [pq.read_table(p).to_pydict() for p in sorted((root / "data").rglob("*.parquet"))]
+    return {k: [v for t in tables for v in t[k]] for k in tables[0]}
+
+
+def same_data(a: Path, b: Path) -> None:
+    fa, fb = frames(a), frames(b)
+    assert fa.keys() == fb.keys()
+    for key in fa:
+        assert np.array_equal(np.asarray(fa[key]), np.asarray(fb[key])), key
+    assert json.loads((a / MARKER).read_text())["episodes"] == json.loads((b / MARKER).read_text())["episodes"]
+
+
+def kill_worker_of(staging: Path, shard: str, after_s: float, killed: list) -> threading.Thread:
+    """Kill (SIGKILL) the process recording ``shard`` ``after_s`` seconds after it started it."""
+    def watch():
+        worker = staging / f"{shard}.worker.json"
+        deadline = time.monotonic() + 120
+        while not worker.is_file() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(after_s)
+        pid = json.loads(worker.read_text())["pid"]
+        assert not (staging / shard / SHARD_MARKER).exists(), "the shard finished before it could be killed"
+        os.kill(pid, signal.SIGKILL)
+        killed.append(pid)
+
+    thread = threading.Thread(target=watch, daemon=True)
+    thread.start()
+    return thread
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The dataset recorded in this process, one shard, no engine."""
+    root = tmp_path_factory.mktemp("scale") / "reference"
+    summary = collect(CollectConfig(out=str(root), **{**SCALE, "shard_size": 32}), **QUIET)
+    assert summary.kept == 4 and summary.shards == 1
+    return root
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    ray.init(num_cpus=2, include_dashboard=False, logging_level="WARNING",
+             runtime_env={"env_vars": {"MUJOCO_GL": os.environ["MUJOCO_GL"], "HF_HUB_OFFLINE": "1"}})
+    yield
+    ray.shutdown()
+
+
+def test_shard_size_does_not_change_the_data(reference, tmp_path):
+    out = tmp_path / "ds"
+    summary = collect(CollectConfig(out=str(out), **{**SCALE, "shard_size": 1}), **QUIET)
+    assert summary.shards == 4 and summary.kept == 4
+    same_data(reference, out)
+
+
+def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(reference, cluster, tmp_path):
+    out = tmp_path / "ds"
+    killed = []
+    watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 3.0, killed)
+    summary = collect(CollectConfig(out=str(out), executor="ray", workers=2, **SCALE), **QUIET)
+    watcher.join()
+    assert killed and summary.retried == 1 and not summary.errors
+    assert summary.kept == 4 and summary.dataset_episodes == 4  # every episode, once
+    same_data(reference, out)
+
+
+def test_a_local_worker_killed_outright_loses_only_its_shard_and_resume_completes(reference, tmp_path):
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    out = tmp_path / "ds"
+    killed = []
+    watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 3.0, killed)
+    summary = collect(CollectConfig(out=str(out), workers=2, retries=0, **SCALE), **QUIET)
+    watcher.join()
+    assert killed and len(summary.errors) == 1 and "SIGKILL" in summary.errors[0]
+    assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]  # the other shard is kept
+    assert LeRobotDataset("local/colorsort", root=out).num_episodes == 2
+
+    summary = collect(CollectConfig(out=str(out), workers=2, resume=True, **SCALE), **QUIET)
+    assert summary.tried == 2 and summary.kept == 2 and not summary.errors
+    same_data(reference, out)
+
+
+def test_resume_after_the_whole_run_was_killed_keeps_its_finished_shards(reference, tmp_path):
+    out = tmp_path / "ds"
+    command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
+               "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "1", "--workers", "2"]
+    run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    staging = tmp_path / ".ds.staging"
+    deadline = time.monotonic() + 300
+    while len(list(staging.glob(f"shard-*/{SHARD_MARKER}"))) < 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    run.send_signal(signal.SIGKILL)  # the collector itself, mid-run; its workers end with it
+    run.wait()
+    finished = len(list(staging.glob(f"shard-*/{SHARD_MARKER}")))
+    assert 2 <= finished < 4 and not out.exists()
+
+    again = subprocess.run(command, capture_output=True, text=True)
+    assert again.returncode == 2 and "--resume" in again.stderr  # nothing is discarded silently
+    done = subprocess.run(command + ["--resume"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert f"{finished} kept from the killed run" in done.stdout
+    same_data(reference, out)
+
+
+def test_a_shard_from_another_run_or_with_other_settings_is_refused(tmp_path):
+    small = dict(episodes=2, cameras=(), shard_size=1)
+    settings = CollectConfig(**small).settings()
+    collect(CollectConfig(out=str(tmp_path / "ds"), **small), **QUIET)
+    staging = tmp_path / ".ds.staging"  # as a killed run of --resume --episodes 6 would leave it
+    (staging / "shard-000005" / "meta").mkdir(parents=True)
+    (staging / "run.json").write_text(json.dumps({"run": "this-run", "settings": settings}))
+    resume = CollectConfig(out=str(tmp_path / "ds"), resume=True, **{**small, "episodes": 6})
+    for marker, match in [({"run": "other-run", "settings": settings}, "comes from another run"),
+                          ({"run": "this-run", "settings": {**settings, "seed": 9}}, "other settings")]:
+        marker.update(tried=[5], kept=[5], failed={})
+        (staging / "shard-000005" / SHARD_MARKER).write_text(json.dumps(marker))
+        with pytest.raises(ValueError, match=match):
+            collect(resume, **QUIET)
+    assert json.loads((tmp_path / "ds" / MARKER).read_text())["episodes"] == [0, 1]  # untouched
+
+
+def test_evaluation_on_ray_gives_the_same_numbers_as_local(cluster):
+    kwargs = dict(episodes=3, image_size=(32, 32), cameras=("scene",), progress=False)
+    local = evaluate("expert", "default", **kwargs, envs=1)
+    spread = evaluate("expert", "default", **kwargs, executor=ExecutorConfig("ray", 2), shard_size=1)
+    assert local.successes == 3 and local == spread
+
+
+def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_command(tmp_path):
+    """The batch script on a one-node stand-in for SLURM: srun runs its command here, scontrol names this host."""
+    shims = tmp_path / "bin"
+    shims.mkdir()
+    (shims / "srun").write_text('#!/bin/bash\nwhile [[ $# -gt 0 && $1 == -* ]]; do [[ $1 == -w ]] && shift; shift; done\n'
+                                'exec "$@"\n')
+    (shims / "scontrol").write_text("#!/bin/bash\nhostname\n")
+    for shim in shims.iterdir():
+        shim.chmod(0o755)
+    script = tmp_path / "job.sbatch"
+    out = tmp_path / "ds"
+    subprocess.run([str(Path(sys.executable).parent / "colorsort-slurm"), "--nodes", "1", "--cpus-per-node", "2",
+                    "--port", "6391", "--out", str(script), "--", "colorsort-collect", "--episodes", "2",
+                    "--cameras", "none", "--out", str(out)], check=True, capture_output=True)
+    env = {**os.environ, "PATH": f"{shims}:{os.environ['PATH']}", "SLURM_JOB_NODELIST": "node1"}
+    job = subprocess.run(["bash", str(script)], env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert job.returncode == 0, job.stdout[-3000:] + job.stderr[-3000:]
+    assert "on 2 ray workers" in job.stdout
+    assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]
