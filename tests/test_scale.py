@@ -3,6 +3,7 @@ whatever the shard size; a worker killed outright loses at most its shard; --res
 crash completes the dataset with every episode once. One Ray cluster (2 CPUs) for the module."""
 
 import json
+import shlex
 import os
 import signal
 import subprocess
@@ -40,6 +41,23 @@ def same_data(a: Path, b: Path) -> None:
     for key in fa:
         assert np.array_equal(np.asarray(fa[key]), np.asarray(fb[key])), key
     assert json.loads((a / MARKER).read_text())["episodes"] == json.loads((b / MARKER).read_text())["episodes"]
+
+
+def by_episode_number(root: Path) -> dict[int, dict]:
+    """Each episode's frames, keyed by its episode number (seed - base seed), positions in the dataset left out."""
+    f, numbers = frames(root), json.loads((root / MARKER).read_text())["episodes"]
+    rows = np.asarray(f["episode_index"])
+    return {n: {k: np.asarray(v)[rows == e] for k, v in f.items() if k not in ("episode_index", "index")}
+            for e, n in enumerate(numbers)}
+
+
+def same_episodes(a: Path, b: Path) -> None:
+    """The same episodes, each with the same data, in any order (--resume appends what it records)."""
+    ea, eb = by_episode_number(a), by_episode_number(b)
+    assert sorted(ea) == sorted(eb)
+    for n in ea:
+        for key in ea[n]:
+            assert np.array_equal(ea[n][key], eb[n][key]), (n, key)
 
 
 def kill_worker_of(staging: Path, shard: str, after_s: float, killed: list) -> threading.Thread:
@@ -177,3 +195,49 @@ def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_command(tmp_path)
     assert job.returncode == 0, job.stdout[-3000:] + job.stderr[-3000:]
     assert "on 2 ray workers" in job.stdout
     assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]
+
+
+def readme_ray_commands() -> list[list[str]]:
+    """README's commands that run on Ray, verbatim."""
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    return [shlex.split(line) for line in readme.splitlines()
+            if line.startswith("colorsort-") and "--executor ray" in line]
+
+
+@pytest.mark.parametrize("argv", readme_ray_commands(), ids=lambda a: a[0])
+def test_readme_ray_commands_work_as_written(argv, tmp_path):
+    job = subprocess.run([str(Path(sys.executable).parent / argv[0])] + argv[1:], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=600)
+    assert job.returncode == 0, job.stderr[-3000:]
+    if argv[0] == "colorsort-collect":
+        assert "on 2 ray workers; retried 0" in job.stdout
+        assert len(json.loads((tmp_path / "datasets/colorsort-ray" / MARKER).read_text())["episodes"]) == 4
+    else:
+        rows = job.stdout.splitlines()[2:]
+        assert {r.split()[0] for r in rows} == {"seed", "default", "fast", "jitter", "lighting", "distractors",
+                                                "tracking", "tracking-fast", "tracking-jitter", "robots-panda",
+                                                "robots-ur5e"}
+        assert float(next(r for r in rows if r.startswith("default ")).split()[2].rstrip("%")) == 100.0
+
+
+@pytest.mark.parametrize("executor", ["local", "ray"])
+def test_ctrl_c_keeps_every_finished_episode_and_resume_completes(executor, reference, tmp_path):
+    out = tmp_path / "ds"
+    command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
+               "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "2", "--workers", "2",
+               "--executor", executor]
+    run = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    staging = tmp_path / ".ds.staging"
+    deadline = time.monotonic() + 300
+    while len(list(staging.glob("shard-*/meta/tasks.parquet"))) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)  # LeRobot writes tasks.parquet when a shard saves its first episode
+    run.send_signal(signal.SIGINT)  # the second episode of each shard under way
+    stdout, stderr = run.communicate(timeout=300)
+    assert run.returncode == 130, stderr[-3000:]
+    assert "interrupted: every finished episode is saved" in stdout
+    marker = json.loads((out / MARKER).read_text())
+    assert 1 <= len(marker["episodes"]) < 4 and set(marker["episodes"]) == set(marker["tried"])
+
+    done = subprocess.run(command + ["--resume"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    same_episodes(reference, out)

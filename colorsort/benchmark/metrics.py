@@ -78,3 +78,14 @@ def format_report(r: EvalReport) -> str:
         ("seeds", f"{r.seeds[0]}..{r.seeds[-1]}" if r.seeds else "-"),
     ]
     return "\n".join(f"{k:<24} {v}" for k, v in rows)
+
+
+def format_table(reports: list[EvalReport]) -> str:
+    """One line per variant: episodes, success rate with its 95% interval, boxes handled, boxes per minute."""
+    lines = [f"{'variant':<16} {'episodes':>8} {'success':>8} {'95% CI':>13} {'placed':>6} {'misplaced':>9} "
+             f"{'dropped':>7} {'boxes/min':>9}"]
+    for r in reports:
+        lo, hi = r.success_ci95
+        lines.append(f"{r.variant:<16} {r.episodes:>8} {100 * r.success_rate:>7.1f}% {100 * lo:>5.1f}-{100 * hi:5.1f}% "
+                     f"{r.correct:>6} {r.misplaced:>9} {r.dropped:>7} {r.boxes_per_minute:>9.1f}")
+    return "\n".join(lines)

@@ -11,7 +11,8 @@ Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` 
 command gives the same numbers, whatever ``--envs`` (episodes run at once), ``--executor`` (local
 processes, or a Ray cluster: a local one, or the one at ``--address``) and ``--shard-size``
 (episodes per job; each job builds one env and one policy). ``--variant all`` runs every
-variant the policy fits (a checkpoint fits those with its robot's state and action sizes).
+variant the policy fits (a checkpoint fits those with its robot's state and action sizes) and
+prints one line per variant.
 Metrics: success rate (every box of the episode where it belongs, none misplaced or dropped) with a 95% Wilson interval; boxes placed correctly, misplaced, dropped;
 distractors (boxes with no bin) let through; boxes per minute (boxes handled right, placed in
 their bin or let through, per minute of sim time); mean cycle time (sim time between consecutive
@@ -28,7 +29,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from colorsort.benchmark.evaluate import evaluate_variants, observation_settings
-from colorsort.benchmark.metrics import format_report
+from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, EXECUTORS, ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
@@ -82,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     except RuntimeError as err:
         print(f"colorsort-eval: {err}", file=sys.stderr)
         return 1
-    print("\n\n".join(format_report(r) for r in reports))
+    print(format_report(reports[0]) if args.variant != "all" else f"policy {args.policy}\n" + format_table(reports))
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         found = [asdict(r) for r in reports]
