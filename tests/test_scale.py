@@ -89,7 +89,7 @@ def reference(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def cluster():
-    ray.init(num_cpus=2, include_dashboard=False, logging_level="WARNING",
+    ray.init(address="local", num_cpus=2, include_dashboard=False, logging_level="WARNING",
              runtime_env={"env_vars": {"MUJOCO_GL": os.environ["MUJOCO_GL"], "HF_HUB_OFFLINE": "1"}})
     yield
     ray.shutdown()

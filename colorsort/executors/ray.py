@@ -50,7 +50,8 @@ class RayExecutor:
 
         started_here = not ray.is_initialized()
         if started_here:
-            ray.init(address=self.config.address, runtime_env={"env_vars": self.env}, include_dashboard=False,
+            # "local": a new cluster here, never one that an earlier `ray start` on this machine left behind
+            ray.init(address=self.config.address or "local", runtime_env={"env_vars": self.env}, include_dashboard=False,
                      logging_level=logging.WARNING)
         queue = Queue()
         remote = ray.remote(_entry).options(num_cpus=1, max_retries=self.config.retries, retry_exceptions=False)

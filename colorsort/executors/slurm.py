@@ -83,7 +83,8 @@ done
 
 status=0
 {shlex.join(args + extra)} --address "$address" || status=$?
-ray stop --force >/dev/null 2>&1 || true
+# Stop this job's Ray nodes only (not `ray stop`, which ends every Ray process on a shared node):
 kill $(jobs -p) 2>/dev/null || true
+wait || true
 exit $status
 """
