@@ -226,7 +226,9 @@ def test_ctrl_c_keeps_every_finished_episode_and_resume_completes(executor, refe
     command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
                "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "2", "--workers", "2",
                "--executor", executor]
-    run = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # SIGINT as a terminal's Ctrl-C delivers it, even where this test runs with SIGINT ignored (a background job)
+    run = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     staging = tmp_path / ".ds.staging"
     deadline = time.monotonic() + 300
     while len(list(staging.glob("shard-*/meta/tasks.parquet"))) < 2 and time.monotonic() < deadline:
