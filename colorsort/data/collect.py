@@ -107,11 +107,13 @@ def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], N
         else:
             summary.not_kept[r.reason] = summary.not_kept.get(r.reason, 0) + 1
         bar.update(1)
-        bar.set_postfix(kept=summary.kept, not_kept=summary.tried - summary.kept,
-                        shards=f"{len(done_shards)}/{len(tasks)}")
+        show()
 
     def on_shard(result: TaskResult) -> None:
         done_shards.append(result.key)
+        show()
+
+    def show() -> None:
         bar.set_postfix(kept=summary.kept, not_kept=summary.tried - summary.kept,
                         shards=f"{len(done_shards)}/{len(tasks)}")
 

@@ -27,6 +27,11 @@ def read_marker(root: Path) -> dict | None:
     return json.loads(path.read_text()) if path.is_file() else None
 
 
+def settings_diff(recorded: dict, config: CollectConfig) -> dict:
+    """The settings that differ: name -> (recorded, requested)."""
+    return {k: (recorded.get(k), v) for k, v in config.settings().items() if recorded.get(k) != v}
+
+
 def check_output(config: CollectConfig, root: Path) -> dict | None:
     """Validate what is at ``root`` against --resume / --overwrite; returns the marker to resume from.
 
@@ -50,8 +55,8 @@ def check_output(config: CollectConfig, root: Path) -> dict | None:
     if marker is None:
         raise ValueError(f"Cannot resume {root}: it has no {MARKER}, so it was not recorded by colorsort-collect")
     if marker["settings"] != config.settings():
-        diff = {k: (marker["settings"].get(k), v) for k, v in config.settings().items() if marker["settings"].get(k) != v}
-        raise ValueError(f"Cannot resume {root} with other settings (recorded, requested): {diff}")
+        raise ValueError(f"Cannot resume {root} with other settings (recorded, requested): "
+                         f"{settings_diff(marker['settings'], config)}")
     return marker
 
 
@@ -70,9 +75,8 @@ def open_staging(config: CollectConfig, root: Path, log) -> tuple[Path, str]:
         if config.resume and run_file.is_file():
             run = json.loads(run_file.read_text())
             if run["settings"] != config.settings():
-                diff = {k: (run["settings"].get(k), v) for k, v in config.settings().items()
-                        if run["settings"].get(k) != v}
-                raise ValueError(f"Cannot resume the run in {staging} with other settings (recorded, requested): {diff}")
+                raise ValueError(f"Cannot resume the run in {staging} with other settings (recorded, requested): "
+                                 f"{settings_diff(run['settings'], config)}")
             return staging, run["run"]
         if done and not config.overwrite:
             episodes = sum(len(m["kept"]) for _, m in done)
@@ -125,9 +129,8 @@ def check_shards(shards: list[tuple[Path, dict]], run: str, config: CollectConfi
             raise ValueError(f"{path} was recorded by run {marker['run']}, not by run {run} that this staging "
                              "folder belongs to: it comes from another run; move it away")
         if marker["settings"] != config.settings():
-            diff = {k: (marker["settings"].get(k), v) for k, v in config.settings().items()
-                    if marker["settings"].get(k) != v}
-            raise ValueError(f"{path} was recorded with other settings (recorded, requested): {diff}")
+            raise ValueError(f"{path} was recorded with other settings (recorded, requested): "
+                             f"{settings_diff(marker['settings'], config)}")
         twice = seen & set(marker["tried"])
         if twice:
             raise ValueError(f"{path} holds episodes {sorted(twice)} that the dataset or another shard already "
