@@ -50,9 +50,11 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_eval.py
 	$(VENV)/bin/python demos/bench_suite.py --episodes 10
 
-# the learned baseline: demos, lerobot-train, colorsort-eval on every IRB 140 variant (about 1.5 h on 2 CPU cores)
+# a learned baseline: demos, lerobot-train, colorsort-eval, learning curve (`make baseline RECIPE=camera-tracking`;
+# `colorsort-baseline --list` names the recipes); about 1.5 h a recipe on 2 CPU cores
+RECIPE ?= camera
 baseline: $(STAMP)
-	$(VENV)/bin/python demos/train_baseline.py
+	$(VENV)/bin/colorsort-baseline --recipe $(RECIPE)
 
 clean:
 	rm -rf $(VENV) build *.egg-info outputs datasets/demo

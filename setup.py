@@ -22,7 +22,7 @@ INSTALL_REQUIRES = [
     "av>=15,<16",
     # --executor ray: collection and evaluation on a Ray cluster (a local one, or one that spans a SLURM job)
     "ray>=2.50,<3",
-    # demos/train_baseline.py plots success against the number of demos:
+    # colorsort-baseline plots success against the number of demos and training time:
     "matplotlib>=3.8",
     # robosuite's real run-time needs, for `pip install --no-deps robosuite`:
     "numba>=0.59",
@@ -60,5 +60,6 @@ setup(
         "colorsort-replay=colorsort.cli.replay:main",
         "colorsort-eval=colorsort.cli.eval:main",
         "colorsort-slurm=colorsort.cli.slurm:main",
+        "colorsort-baseline=colorsort.cli.baseline:main",
     ]},
 )

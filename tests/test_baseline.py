@@ -1,4 +1,4 @@
-"""The learned baseline: demos/train_baseline.py end to end (tiny), and the shipped checkpoint in both evaluators."""
+"""The learned baselines: colorsort-baseline end to end (tiny), its recipes, the shipped checkpoints in both tools."""
 
 import json
 import os
@@ -10,10 +10,11 @@ import cv2
 import pytest
 
 from colorsort.cli.eval import main as eval_main
+from colorsort.training.recipes import RECIPES, get_recipe
 
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
-SHIPPED = REPO / "baselines" / "act-state"
+SHIPPED = {name: REPO / "baselines" / name for name in ("act-state", "act-camera", "act-camera-tracking")}
 
 
 def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProcess:
@@ -21,84 +22,148 @@ def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProce
     return subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
 
 
-def test_the_baseline_script_runs_end_to_end_in_a_tiny_configuration(tmp_path):
-    """Two demo counts from two variants (merged with LeRobot's aggregate_datasets), 2 training steps each,
-    one evaluation episode per variant; then the same command again reuses every finished stage."""
+def baseline(*args: str) -> list[str]:
+    return [str(BIN / "colorsort-baseline"), *args]
+
+
+def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
+    """Two demo counts from two variants (merged with LeRobot's aggregate_datasets), 2 training steps each with a
+    checkpoint after each, one evaluation episode per variant, the learning curve; then the same command again
+    reuses every finished stage."""
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
-    argv = [sys.executable, str(REPO / "demos" / "train_baseline.py"), "--demos", "2,3",
-            "--train-variants", "default,distractors", "--steps", "2", "--small-steps", "2", "--batch-size", "2",
-            "--eval-variants", "default,jitter", "--eval-episodes", "1", "--other-episodes", "1",
-            "--episode-length", "10", "--workers", "1", "--envs", "1", "--out", str(out)]
+    argv = baseline("--recipe", "state", "--demos", "2,3", "--train-variants", "default,distractors", "--steps", "2",
+                    "--small-steps", "2", "--save-every", "1", "--batch-size", "2", "--eval-variants", "default,jitter",
+                    "--eval-episodes", "1", "--other-episodes", "1", "--curve-episodes", "1",
+                    "--episode-length", "10", "--workers", "1", "--envs", "1", "--out", str(out))
     first = run(argv + ["--ship", str(ship)], tmp_path, timeout=900)
     assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
 
-    results = json.loads((out / "results.json").read_text())["results"]
-    assert [(r["demos"], r["variant"], r["steps"]) for r in results] == [(2, "default", 2), (3, "default", 2),
-                                                                          (3, "jitter", 2)]
-    assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results)  # 10 steps sort nothing
+    results = json.loads((out / "results.json").read_text())
+    assert [(r["demos"], r["variant"], r["steps"]) for r in results["rows"]] == [
+        (2, "default", 2), (3, "default", 2), (3, "jitter", 2)]
+    assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
+    assert [p["step"] for p in results["curve"]] == [1, 2]
+    assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
+    assert (out / "curve" / "demos-3-2steps-1.json").is_file()  # step 1 evaluated; step 2 is the full score's
     assert "| default | ACT, state | 3 | 2 steps" in first.stdout
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     merged = LeRobotDataset("local/colorsort-baseline", root=out / "data" / "demos-3")
     assert merged.num_episodes == 3 and merged.meta.video_keys == []
-    assert len(merged.meta.tasks) >= 1
-    image = cv2.imread(str(out / "success_vs_demos.png"))
-    assert image is not None and image.shape[0] > 200 and image.shape[1] > 300
+    for plot in ("success_vs_demos.png", "learning_curve.png"):
+        image = cv2.imread(str(out / plot))
+        assert image is not None and image.shape[0] > 200 and image.shape[1] > 300
 
     shipped = {p.name for p in ship.iterdir()}
-    assert {"config.json", "model.safetensors", "README.md", "success_vs_demos.png"} <= shipped
+    assert {"config.json", "model.safetensors", "README.md", "scores.json", "learning_curve.png"} <= shipped
     assert any(name.startswith("policy_preprocessor") for name in shipped)
     readme = (ship / "README.md").read_text()
-    assert "train_baseline.py" in readme and "commit" in readme and "| jitter | ACT, state | 3 |" in readme
+    assert "colorsort-baseline --recipe state" in readme and "commit" in readme
+    assert "| jitter | ACT, state | 3 |" in readme
+    assert json.loads((ship / "scores.json").read_text())["rows"] == results["rows"]
     assert eval_main(["--policy", str(ship), "--variant", "default", "--episodes", "1", "--episode-length", "5"]) == 0
 
     again = run(argv, tmp_path, timeout=600)
     assert again.returncode == 0, again.stderr[-3000:]
-    assert again.stdout.count("reusing") == 2 + 2 + 3 and "lerobot-train" not in again.stdout
+    assert again.stdout.count("reusing") == 2 + 2 + 3 + 1 and "lerobot-train" not in again.stdout
     assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
 
 
-def test_bad_baseline_settings_name_the_valid_choices(tmp_path):
-    script = str(REPO / "demos" / "train_baseline.py")
-    bad = run([sys.executable, script, "--train-variants", "default,nope", "--out", str(tmp_path)], tmp_path, 120)
-    assert bad.returncode == 2 and "Valid variants" in bad.stderr
-    bad = run([sys.executable, script, "--demos", "50,20", "--out", str(tmp_path)], tmp_path, 120)
-    assert bad.returncode == 2 and "increasing" in bad.stderr
+def test_the_camera_recipe_runs_in_small(tmp_path):
+    """The camera recipe, tiny: the policy takes the images and the arm's state, never the simulator's box state,
+    and colorsort-eval renders exactly the cameras it was trained on and refuses others."""
+    out = tmp_path / "camera"
+    result = run(baseline("--recipe", "camera", "--image-size", "32", "--demos", "1", "--train-variants", "default",
+                          "--steps", "2", "--batch-size", "2", "--eval-variants", "default", "--eval-episodes", "1",
+                          "--curve-episodes", "1", "--episode-length", "5", "--workers", "1", "--envs", "1",
+                          "--out", str(out)), tmp_path, timeout=900)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    info = json.loads((out / "data" / "demos-1" / "meta" / "info.json").read_text())
+    assert {"observation.images.sensor", "observation.images.wrist"} <= set(info["features"])
+    assert "observation.environment_state" not in info["features"]
+    model = out / "train" / "demos-1-2steps" / "checkpoints" / "last" / "pretrained_model"
+    config = json.loads((model / "config.json").read_text())
+    assert set(config["input_features"]) == {"observation.state", "observation.images.sensor",
+                                             "observation.images.wrist"}
+    assert config["input_features"]["observation.images.wrist"]["shape"] == [3, 32, 32]
+    assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 128
+    assert "| default | ACT, sensor+wrist | 1 | 2 steps" in result.stdout
+
+    from colorsort.benchmark.evaluate import EvalSettings, _Runner, observation_settings
+
+    assert observation_settings(str(model), None, None) == (("sensor", "wrist"), (32, 32))
+    runner = _Runner(EvalSettings(str(model), "default", (32, 32), ("sensor", "wrist"), episode_length=3))
+    obs, _ = runner.env.reset(seed=0)
+    assert set(obs["pixels"]) == {"sensor", "wrist"} and obs["pixels"]["wrist"].shape == (32, 32, 3)
+    runner.env.close()
+    assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "scene"]) == 2
+    assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
 
 
-@pytest.mark.skipif(not SHIPPED.is_dir(), reason="no baseline shipped yet")
-def test_the_shipped_baseline_sorts_through_colorsort_eval(tmp_path, capsys):
-    """README's command for the shipped policy, on the first default seed: the cameras come from the checkpoint."""
+def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
+    from colorsort.cli.baseline import main
+
+    assert main(["--recipe", "nope", "--out", str(tmp_path)]) == 2
+    assert "Valid recipes" in capsys.readouterr().err
+    assert main(["--train-variants", "default,nope", "--out", str(tmp_path)]) == 2
+    assert "Valid variants" in capsys.readouterr().err
+    assert main(["--demos", "50,20", "--out", str(tmp_path)]) == 2
+    assert "increasing" in capsys.readouterr().err
+    assert main(["--cameras", "top", "--out", str(tmp_path)]) == 2
+    assert "Valid cameras" in capsys.readouterr().err
+    assert main(["--train-variants", "default:x", "--out", str(tmp_path)]) == 2
+    with pytest.raises(SystemExit):
+        main(["--until", "later"])
+
+
+def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_state():
+    assert get_recipe("state").split(40) == {"default": 10, "jitter": 10, "fast": 10, "distractors": 10}
+    camera = get_recipe("camera")
+    assert sum(camera.split(115).values()) == 115 and camera.split(115)["jitter"] == 30
+    assert sum(camera.split(7).values()) == 7
+    for recipe in RECIPES.values():
+        assert recipe.main_variant in recipe.eval_variants
+    tracking = get_recipe("camera-tracking")
+    assert set(tracking.eval_variants) == {"tracking", "tracking-jitter", "tracking-fast"} and tracking.cameras
+
+
+@pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])
+def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
+    """README's command for a shipped policy on its main variant's first seed: cameras come from the checkpoint."""
+    if not SHIPPED[name].is_dir():
+        pytest.skip(f"baselines/{name} is not shipped")
+    scores_path = SHIPPED[name] / "scores.json"
+    scores = json.loads(scores_path.read_text()) if scores_path.is_file() else {}
+    variant = scores.get("recipe", {}).get("main_variant", "default")
     report = tmp_path / "eval.json"
-    assert eval_main(["--policy", str(SHIPPED), "--variant", "default", "--episodes", "1", "--json", str(report)]) == 0
+    assert eval_main(["--policy", str(SHIPPED[name]), "--variant", variant, "--episodes", "1",
+                      "--json", str(report)]) == 0
     result = json.loads(report.read_text())
-    assert result["correct"] >= 1 and result["dropped"] == 0  # it picks and places: not an untrained policy
+    assert result["correct"] >= 1  # it picks and places: not an untrained policy
 
 
-@pytest.mark.skipif(not SHIPPED.is_dir(), reason="no baseline shipped yet")
-def test_the_shipped_baseline_runs_in_lerobot_eval(tmp_path):
-    """README's lerobot-eval command for the shipped policy, one episode."""
-    result = run([str(BIN / "lerobot-eval"), "--env.type=colorsort", "--env.task=ColorSort-Default-v0",
-                  "--env.cameras=none", f"--policy.path={SHIPPED}", "--policy.device=cpu",
-                  "--eval.n_episodes=1", "--eval.batch_size=1", f"--output_dir={tmp_path / 'eval'}"],
-                 tmp_path, timeout=600)
+@pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])
+def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
+    """README's lerobot-eval command for a shipped policy, one episode."""
+    if not SHIPPED[name].is_dir():
+        pytest.skip(f"baselines/{name} is not shipped")
+    from colorsort.benchmark.policies import checkpoint_cameras
+
+    cameras, size = checkpoint_cameras(SHIPPED[name])
+    task = "ColorSort-Tracking-v0" if "tracking" in name else "ColorSort-Default-v0"
+    result = run([str(BIN / "lerobot-eval"), "--env.type=colorsort", f"--env.task={task}",
+                  f"--env.cameras={','.join(cameras) or 'none'}", f"--env.image_size={size[0] if size else 128}",
+                  f"--policy.path={SHIPPED[name]}", "--policy.device=cpu", "--eval.n_episodes=1",
+                  "--eval.batch_size=1", f"--output_dir={tmp_path / 'eval'}"], tmp_path, timeout=600)
     assert result.returncode == 0, result.stderr[-3000:]
     overall = json.loads((tmp_path / "eval" / "eval_info.json").read_text())["overall"]
     assert overall["n_episodes"] == 1 and 0 <= overall["pc_success"] <= 100
 
 
-def test_the_vision_recipe_runs_in_small_on_the_cpu(tmp_path):
-    """README's GPU recipe with the device set to the CPU and everything tiny: the policy takes the camera and
-    not the simulator's box state, and colorsort-eval renders what it was trained on."""
-    out = tmp_path / "vision"
-    result = run([sys.executable, str(REPO / "demos" / "train_baseline.py"), "--cameras", "wrist", "--image-size", "32",
-                  "--device", "cpu", "--demos", "1", "--train-variants", "default", "--steps", "2", "--batch-size", "2",
-                  "--eval-variants", "default", "--eval-episodes", "1", "--episode-length", "5", "--workers", "1",
-                  "--envs", "1", "--out", str(out)], tmp_path, timeout=900)
-    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
-    info = json.loads((out / "data" / "demos-1" / "meta" / "info.json").read_text())
-    assert "observation.images.wrist" in info["features"] and "observation.environment_state" not in info["features"]
-    config = json.loads((out / "train" / "demos-1-2steps" / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text())
-    assert set(config["input_features"]) == {"observation.state", "observation.images.wrist"}
-    assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 512
-    assert "| default | ACT, wrist | 1 | 2 steps" in result.stdout
+def test_readmes_recipe_list_runs_verbatim():
+    """README's `colorsort-baseline --list`, as written: one line per recipe."""
+    readme = (REPO / "README.md").read_text()
+    assert "colorsort-baseline --list\n" in readme
+    result = run(baseline("--list"), REPO, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert [line.split()[0] for line in result.stdout.splitlines()] == list(RECIPES)

@@ -10,7 +10,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "colorsort"
 # Lowest first; a module may import its own layer and those before it.
-LAYERS = ("base", "executors", "cell", "expert", "data", "benchmark", "cli")
+LAYERS = ("base", "executors", "cell", "expert", "data", "benchmark", "training", "cli")
 MAX_LINES = 400
 
 

@@ -1,0 +1,109 @@
+"""A learned baseline end to end: demos -> ``lerobot-train`` -> ``colorsort-eval`` -> table, plots, shipped policy.
+
+For each demo count of the recipe: collect (``stages.collect``), train (``stages.train``), score
+the largest set's policy on every evaluation variant and the smaller sets' on the main variant;
+then the learning curve (each earlier checkpoint of the largest set on the main variant's first
+``curve_episodes`` seeds; the last checkpoint's point is the first episodes of its full score).
+Finished stages are reused, so the pipeline can be rebuilt over several sittings.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from colorsort.training import stages
+from colorsort.training.recipes import Recipe
+from colorsort.training.report import first_episodes, plot_curve, plot_demos, table
+from colorsort.training.ship import machine, ship
+
+UNTIL = ("data", "train", "eval")
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """How one run of the pipeline runs (not what it makes: that is the recipe).
+
+    Attributes:
+        out: working folder (datasets, training runs, evaluations, logs, results).
+        workers: collection processes.
+        envs: evaluation processes.
+        until: the last stage to run: "data", "train" or "eval" (everything).
+    """
+
+    out: Path
+    workers: int = 2
+    envs: int = 2
+    until: str = "eval"
+
+    def __post_init__(self) -> None:
+        if self.until not in UNTIL:
+            raise ValueError(f"until={self.until!r}: valid stages are {list(UNTIL)}")
+        for key in ("workers", "envs"):
+            if getattr(self, key) < 1:
+                raise ValueError(f"{key}={getattr(self, key)}: give at least 1")
+
+
+def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: Path | None = None) -> dict:
+    """Every stage of ``recipe`` under ``settings.out``; the results (also written to ``out/results.json``)."""
+    out = settings.out
+    out.mkdir(parents=True, exist_ok=True)
+    started, t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), time.perf_counter()
+    rows: list[dict] = []
+    curve: list[dict] = []
+    for n in recipe.demos:
+        largest = n == recipe.demos[-1]
+        steps = recipe.steps if largest else recipe.small_steps
+        data = stages.collect(recipe, n, out, settings.workers)
+        if settings.until == "data":
+            continue
+        run_dir, timing = stages.train(recipe, data, steps, out)
+        if settings.until == "train":
+            continue
+        kept = json.loads((data / "meta" / "info.json").read_text())["total_episodes"]
+        last = run_dir / "checkpoints" / "last" / "pretrained_model"
+        for variant in recipe.eval_variants if largest else (recipe.main_variant,):
+            report = stages.evaluate(recipe, last, variant, recipe.episodes_on(variant),
+                                     out / "eval" / f"{run_dir.name}-{variant}.json", settings.envs,
+                                     out / "logs" / f"eval-{run_dir.name}-{variant}.log")
+            rows.append({"demos_tried": n, "demos": kept, "steps": steps, "train_minutes": timing["wall_s"] / 60,
+                         **report})
+            print(table([rows[-1]], recipe.label).splitlines()[-1], flush=True)
+        if largest and recipe.save_every:
+            curve = learning_curve(recipe, settings, run_dir, timing, rows[-len(recipe.eval_variants):])
+    if settings.until != "eval":
+        print(f"stopped after the {settings.until!r} stage: {out}")
+        return {}
+    plots = [out / "success_vs_demos.png"]
+    plot_demos([r for r in rows if r["variant"] == recipe.main_variant], recipe.label, recipe.main_variant, plots[0])
+    if curve:
+        plots.append(out / "learning_curve.png")
+        plot_curve(curve, recipe.label, recipe.main_variant, machine(recipe.device), plots[1])
+    wall = time.perf_counter() - t0
+    results = {"recipe": asdict(recipe), "command": command, "started": started, "wall_s": round(wall, 1),
+               "rows": rows, "curve": curve}
+    (out / "results.json").write_text(json.dumps(results, indent=1))
+    print(f"\n{table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\nresults: {out / 'results.json'}\n"
+          f"wall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
+    if ship_to is not None:
+        ship(recipe, last, results, plots, ship_to, command)
+    return results
+
+
+def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
+                   scored: list[dict]) -> list[dict]:
+    """Success on the main variant's first ``curve_episodes`` seeds at every checkpoint, with its training time."""
+    final = next(r for r in scored if r["variant"] == recipe.main_variant)
+    episodes = min(recipe.curve_episodes, final["episodes"])
+    points = []
+    for step, minutes, model in stages.checkpoints(run_dir, timing):
+        if step == recipe.steps:
+            report = final
+        else:
+            report = stages.evaluate(recipe, model, recipe.main_variant, episodes,
+                                     settings.out / "curve" / f"{run_dir.name}-{step}.json", settings.envs,
+                                     settings.out / "logs" / f"curve-{run_dir.name}-{step}.log")
+        points.append({"step": step, "minutes": round(minutes, 1), **first_episodes(report, episodes)})
+    return points

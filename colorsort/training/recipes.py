@@ -1,0 +1,159 @@
+"""Named recipes for the learned baselines: the demos, the LeRobot ACT policy and its training, the evaluation.
+
+A recipe is everything ``colorsort-baseline`` needs to rebuild a baseline: which variants the
+expert's demos come from (and in what proportion), which inputs the policy reads (the cameras
+or the simulator's box state), the ACT size and training length, and which variants score it.
+
+- ``state``: the simulator's box state (``observation.environment_state``) and the arm's; no
+  cameras. The policy in ``baselines/act-state``.
+- ``camera``: the ``sensor`` and ``wrist`` cameras at 64 px and ``observation.state`` only
+  (joints, cup, suction, ray, belt): what a real cell has. ResNet-18 from scratch, on 2 CPU cores.
+- ``camera-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
+- ``camera-large``: LeRobot's ACT size on 128 px images, for a GPU (``--device cuda``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+
+IRB140_VARIANTS = ("seed", "default", "fast", "jitter", "lighting", "distractors")
+TRACKING_VARIANTS = ("tracking", "tracking-jitter", "tracking-fast")
+DEVICES = ("cpu", "cuda", "mps")
+
+
+@dataclass(frozen=True)
+class ActSettings:
+    """LeRobot ACT settings, passed to ``lerobot-train`` as ``--policy.<name>=<value>``."""
+
+    dim_model: int = 128
+    dim_feedforward: int = 512
+    n_heads: int = 4
+    n_encoder_layers: int = 2
+    n_decoder_layers: int = 1
+    chunk_size: int = 20  # actions predicted per inference [steps of 50 ms]
+    n_action_steps: int = 10  # of which the first are executed before the policy looks again
+    use_vae: bool = False  # the expert is deterministic: one mode per state, nothing for a latent to explain
+    optimizer_lr: float = 1e-4  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
+    optimizer_lr_backbone: float = 1e-4
+    pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
+
+    def args(self) -> list[str]:
+        text = {True: "true", False: "false", None: "null"}
+        return [f"--policy.{k}={text.get(v, v) if isinstance(v, (bool, type(None))) else v}"
+                for k, v in asdict(self).items()]
+
+
+SMALL_ACT = ActSettings()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
+LARGE_ACT = ActSettings(dim_model=512, dim_feedforward=3200, n_heads=8, n_encoder_layers=4)  # LeRobot's own size
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """One learned baseline, from demos to scores.
+
+    Attributes:
+        name: the preset's name (``RECIPES``).
+        act: the ACT policy's settings.
+        cameras: camera inputs; () for a policy that reads the simulator's box state instead.
+        image_size: square camera images [px].
+        train_mix: (variant, weight) pairs: each demo count is split over them in proportion.
+        demos: increasing demo counts; the largest trains the shipped policy.
+        boxes_per_episode: boxes that leave the belt in one demo.
+        steps: training updates of the largest set.
+        small_steps: training updates of the smaller sets.
+        batch_size: samples per update.
+        save_every: updates between checkpoints (the learning curve's points); 0: the last only.
+        main_variant: the variant of the headline score, the demo curve and the learning curve.
+        eval_variants: the variants the largest set's policy is scored on.
+        eval_episodes: evaluation episodes on ``main_variant``.
+        other_episodes: evaluation episodes on every other variant.
+        curve_episodes: episodes per learning-curve checkpoint (the main variant's first seeds).
+        episode_length: evaluation steps before truncation (None: the variant's time limit).
+        device: ``lerobot-train``'s device.
+    """
+
+    name: str
+    act: ActSettings = SMALL_ACT
+    cameras: tuple[str, ...] = ()
+    image_size: int = 64
+    train_mix: tuple[tuple[str, float], ...] = (("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 1))
+    demos: tuple[int, ...] = (8, 40, 200)
+    boxes_per_episode: int = 3
+    steps: int = 6000
+    small_steps: int = 2500
+    batch_size: int = 64
+    save_every: int = 0
+    main_variant: str = "default"
+    eval_variants: tuple[str, ...] = IRB140_VARIANTS
+    eval_episodes: int = 50
+    other_episodes: int = 20
+    curve_episodes: int = 20
+    episode_length: int | None = None
+    device: str = "cpu"
+
+    def __post_init__(self) -> None:
+        from colorsort.cell.cameras import check_cameras
+        from colorsort.variants import get_variant
+
+        for name in self.train_variants + self.eval_variants + (self.main_variant,):
+            get_variant(name)  # ValueError naming the valid variants
+        check_cameras(self.cameras)
+        if any(w <= 0 for _, w in self.train_mix):
+            raise ValueError(f"train_mix={self.train_mix}: give every variant a weight above 0")
+        if (not self.demos or list(self.demos) != sorted(set(self.demos))
+                or any(n < len(self.train_mix) for n in self.demos)):
+            raise ValueError(f"demos={self.demos}: give increasing counts, each at least the number of training "
+                             f"variants ({len(self.train_mix)})")
+        if self.device not in DEVICES:
+            raise ValueError(f"device={self.device!r}: valid devices are {list(DEVICES)}")
+        if self.main_variant not in self.eval_variants:
+            raise ValueError(f"main_variant={self.main_variant!r} must be one of eval_variants {self.eval_variants}")
+        for key in ("steps", "small_steps", "batch_size", "eval_episodes", "other_episodes", "curve_episodes",
+                    "image_size", "boxes_per_episode"):
+            if getattr(self, key) < 1:
+                raise ValueError(f"{key}={getattr(self, key)}: give at least 1")
+        if self.save_every < 0:
+            raise ValueError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
+
+    @property
+    def train_variants(self) -> tuple[str, ...]:
+        return tuple(v for v, _ in self.train_mix)
+
+    @property
+    def label(self) -> str:
+        return f"ACT, {'+'.join(self.cameras) if self.cameras else 'state'}"
+
+    def split(self, n: int) -> dict[str, int]:
+        """``n`` demos over ``train_mix`` in proportion to the weights (largest remainders round up)."""
+        total = sum(w for _, w in self.train_mix)
+        exact = [n * w / total for _, w in self.train_mix]
+        counts = [int(x) for x in exact]
+        for k in sorted(range(len(exact)), key=lambda k: counts[k] - exact[k])[: n - sum(counts)]:
+            counts[k] += 1
+        return {v: c for v, c in zip(self.train_variants, counts)}
+
+    def episodes_on(self, variant: str) -> int:
+        return self.eval_episodes if variant == self.main_variant else self.other_episodes
+
+
+RECIPES: dict[str, Recipe] = {r.name: r for r in (
+    Recipe("state"),
+    # lighting demos for the cameras' sake; jitter and distractors weigh more: the box's pose and the
+    # let-through decision must be read from the images
+    Recipe("camera", cameras=("sensor", "wrist"), image_size=64, batch_size=32,
+           train_mix=(("default", 4), ("lighting", 4), ("jitter", 6), ("distractors", 5), ("fast", 4)),
+           demos=(115,), steps=3000, save_every=1000),
+    Recipe("camera-tracking", cameras=("sensor", "wrist"), image_size=64, batch_size=32,
+           train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(80,), boxes_per_episode=5, steps=3000,
+           save_every=1000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
+    Recipe("camera-large", act=LARGE_ACT, cameras=("sensor", "wrist"), image_size=128, batch_size=32,
+           train_mix=(("default", 4), ("lighting", 4), ("jitter", 6), ("distractors", 5), ("fast", 4)),
+           demos=(115,), steps=20000, save_every=5000, device="cuda"),
+)}
+
+
+def get_recipe(name: str, **overrides) -> Recipe:
+    """The preset ``name`` with ``overrides`` (Recipe fields); ValueError naming the valid presets otherwise."""
+    if name not in RECIPES:
+        raise ValueError(f"Unknown recipe {name!r}. Valid recipes: {list(RECIPES)}")
+    return replace(RECIPES[name], **overrides)

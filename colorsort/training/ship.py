@@ -1,0 +1,89 @@
+"""Shipping a trained policy: LeRobot's ``pretrained_model`` files, its scores as JSON, plots and a README."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+from colorsort.training.recipes import Recipe
+from colorsort.training.report import curve_table, table
+from colorsort.variants import get_variant
+
+
+def commit() -> str:
+    """The checkout's commit (marked when it has uncommitted changes), or why there is none."""
+    try:
+        sha = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                               text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown (not a git checkout)"
+    return sha + (" (with uncommitted changes)" if dirty else "")
+
+
+def parameters(model: Path) -> int:
+    """Parameters stored in a pretrained_model folder's weights."""
+    from safetensors import safe_open
+
+    with safe_open(str(model / "model.safetensors"), "np") as f:
+        return sum(math.prod(f.get_slice(k).get_shape()) for k in f.keys())
+
+
+def machine(device: str) -> str:
+    """One line: this machine's CPU cores and the training device."""
+    return f"a {os.cpu_count()}-core machine, training on {'the CPU' if device == 'cpu' else device}"
+
+
+def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Path, command: str) -> None:
+    """Copy ``model`` to ``dest`` with ``scores.json`` (``results``), the plots and a README of how it was made."""
+    dest.mkdir(parents=True, exist_ok=True)
+    for f in model.iterdir():
+        shutil.copy2(f, dest / f.name)
+    for p in plots:
+        shutil.copy2(p, dest / p.name)
+    (dest / "scores.json").write_text(json.dumps(results, indent=1))
+    largest = [r for r in results["rows"] if r["demos_tried"] == recipe.demos[-1]]
+    size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
+    mix = ", ".join(f"{c} on {v}" for v, c in recipe.split(recipe.demos[-1]).items())
+    inputs = (f"`observation.state` and the cameras {', '.join(recipe.cameras)} at {recipe.image_size} px, never "
+              "`observation.environment_state`: the policy sees the boxes" if recipe.cameras else
+              "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
+    act = recipe.act
+    backbone = " ResNet-18 trained from scratch (no pretrained weights)," if recipe.cameras else ""
+    curve = ""
+    if results.get("curve"):
+        curve = (f"\nLearning curve on `{recipe.main_variant}` (each checkpoint on the first {recipe.curve_episodes} "
+                 f"evaluation seeds; `learning_curve.png`):\n\n{curve_table(results['curve'])}\n")
+    cameras = ",".join(recipe.cameras) or "none"
+    task = get_variant(recipe.main_variant).gym_id.removeprefix("colorsort/")
+    (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
+
+LeRobot ACT ({parameters(dest) / 1e6:.2f} M parameters,{backbone} {act.dim_model}-dim, {act.n_encoder_layers} encoder
+and {act.n_decoder_layers} decoder layers, chunks of {act.chunk_size} actions of which {act.n_action_steps} are
+executed, {"a" if act.use_vae else "no"} VAE, learning rate {act.optimizer_lr}) on {inputs}. {size_mb:.1f} MB.
+
+Made by `{command}` (recipe `{recipe.name}`) on commit {commit()}, started {results['started']}, on
+{machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {recipe.boxes_per_episode} boxes each),
+{largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {recipe.batch_size} in
+{largest[0]['train_minutes']:.0f} min of `lerobot-train`. Stages reused from earlier runs of the same command
+count with the time they took then.
+
+Run it:
+
+```
+colorsort-eval --policy {dest} --variant {recipe.main_variant} --episodes 50
+HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task={task} --env.cameras={cameras} \\
+    --env.image_size={recipe.image_size} --policy.path={dest} --policy.device=cpu \\
+    --eval.n_episodes=50 --eval.batch_size=2
+```
+
+Scores (`colorsort-eval`, each variant's fixed evaluation seeds; `scores.json` holds them with every episode):
+
+{table(largest, recipe.label)}
+{curve}""")
+    print(f"shipped {dest} ({size_mb:.1f} MB)")
+

@@ -1,0 +1,135 @@
+"""The pipeline's stages, each a documented command run as a subprocess, each reused when already finished.
+
+Layout of the working folder ``out``::
+
+    data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant
+    data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
+    train/demos-<N>-<S>steps/ lerobot-train's run; train/demos-<N>-<S>steps.json its timing
+    eval/<run>-<variant>.json colorsort-eval's report of the run's last checkpoint
+    curve/<run>-<step>.json   colorsort-eval's report of an earlier checkpoint (the learning curve)
+    logs/                     each command's output
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from colorsort.training.recipes import Recipe
+
+REPO_ID = "local/colorsort-baseline"
+BIN = Path(sys.executable).parent  # the console scripts of this interpreter's environment
+SEED_STRIDE = 1_000_000  # training variant k's demos use seeds k * SEED_STRIDE + i: no two overlap
+RUN_ENV = {"HF_HUB_OFFLINE": "1"}  # no hub downloads in any stage
+
+
+def run(cmd: list[str], log: Path) -> float:
+    """Run ``cmd`` (printed first) with its output to ``log``; its wall time [s]. RuntimeError on failure."""
+    print("$ " + shlex.join(cmd), flush=True)
+    log.parent.mkdir(parents=True, exist_ok=True)
+    t = time.perf_counter()
+    with log.open("w") as f:
+        result = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env={**os.environ, **RUN_ENV})
+    if result.returncode != 0:
+        raise RuntimeError(f"exit code {result.returncode}: {shlex.join(cmd)}\n{log.read_text()[-3000:]}")
+    return time.perf_counter() - t
+
+
+def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
+    """The training set of ``n`` demos: one ``colorsort-collect`` per training variant, merged (reused if there).
+
+    Demo i of training variant k has seed ``k * SEED_STRIDE + i``, so a smaller set's parts are the
+    first episodes of a larger one's. With cameras the merged set loses ``observation.environment_state``:
+    a camera policy must see the boxes, not read them from the simulator."""
+    root = out / "data" / f"demos-{n}"
+    if (root / "meta" / "info.json").is_file() and (root / "meta" / "complete").is_file():
+        print(f"reusing {root}")
+        return root
+    parts = []
+    for k, (variant, count) in enumerate(recipe.split(n).items()):
+        part = out / "data" / f"{variant}-{count}"
+        if not (part / "meta" / "colorsort.json").is_file():
+            shutil.rmtree(part, ignore_errors=True)
+            run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
+                 "--boxes-per-episode", str(recipe.boxes_per_episode), "--seed", str(SEED_STRIDE * k),
+                 "--cameras", ",".join(recipe.cameras) or "none", "--image-size", str(recipe.image_size),
+                 "--workers", str(workers), "--out", str(part), "--repo-id", REPO_ID],
+                out / "logs" / f"collect-{variant}-{count}.log")
+        else:
+            print(f"reusing {part}")
+        parts.append(part)
+    merge(parts, root, drop_box_state=bool(recipe.cameras))
+    return root
+
+
+def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
+    """LeRobot's ``aggregate_datasets`` of ``parts`` into ``root``, then ``remove_feature`` of the box state."""
+    from lerobot.datasets.aggregate import aggregate_datasets
+    from lerobot.datasets.dataset_tools import remove_feature
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    shutil.rmtree(root, ignore_errors=True)
+    merged = root.with_name(f".{root.name}.merged")
+    shutil.rmtree(merged, ignore_errors=True)
+    aggregate_datasets([REPO_ID] * len(parts), REPO_ID, roots=parts, aggr_root=merged if drop_box_state else root)
+    if drop_box_state:
+        remove_feature(LeRobotDataset(REPO_ID, root=merged), "observation.environment_state", output_dir=root,
+                       repo_id=REPO_ID)
+        shutil.rmtree(merged)
+    (root / "meta" / "complete").write_text("")
+
+
+def train_command(recipe: Recipe, data: Path, steps: int, run_dir: Path) -> list[str]:
+    """``lerobot-train`` of the recipe's ACT on ``data`` for ``steps`` updates into ``run_dir``."""
+    save_every = recipe.save_every if 0 < recipe.save_every < steps else steps
+    return [str(BIN / "lerobot-train"), f"--dataset.repo_id={REPO_ID}", f"--dataset.root={data}",
+            "--policy.type=act", f"--policy.device={recipe.device}", "--policy.push_to_hub=false",
+            *recipe.act.args(), f"--batch_size={recipe.batch_size}", f"--steps={steps}",
+            f"--save_freq={save_every}", "--log_freq=200", "--num_workers=1", "--seed=1000",
+            "--wandb.enable=false", f"--output_dir={run_dir}"]
+
+
+def train(recipe: Recipe, data: Path, steps: int, out: Path) -> tuple[Path, dict]:
+    """``lerobot-train``; the run folder and its timing ``{"started": unix time, "wall_s": s}`` (reused if there)."""
+    run_dir = out / "train" / f"{data.name}-{steps}steps"
+    timing_path = run_dir.with_suffix(".json")
+    if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
+        print(f"reusing {run_dir}")
+        return run_dir, json.loads(timing_path.read_text())
+    if run_dir.exists():
+        print(f"removing {run_dir}, an unfinished training run")
+        shutil.rmtree(run_dir)
+    started = time.time()
+    seconds = run(train_command(recipe, data, steps, run_dir), out / "logs" / f"train-{run_dir.name}.log")
+    timing = {"started": started, "wall_s": round(seconds, 1)}
+    timing_path.write_text(json.dumps(timing))
+    return run_dir, timing
+
+
+def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
+    """Every checkpoint of a training run as (update, minutes of training when it was saved, pretrained_model)."""
+    found = []
+    for step_dir in sorted((run_dir / "checkpoints").iterdir()):
+        if step_dir.name.isdigit() and not step_dir.is_symlink():
+            saved = (step_dir / "training_state" / "training_step.json").stat().st_mtime
+            found.append((int(step_dir.name), (saved - timing["started"]) / 60, step_dir / "pretrained_model"))
+    return found
+
+
+def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, path: Path, envs: int, log: Path) -> dict:
+    """``colorsort-eval`` of ``model`` on ``variant``'s first ``episodes`` evaluation seeds (reused if there)."""
+    if path.is_file():
+        print(f"reusing {path}")
+        return json.loads(path.read_text())
+    cmd = [str(BIN / "colorsort-eval"), "--policy", str(model), "--variant", variant, "--episodes", str(episodes),
+           "--envs", str(envs), "--json", str(path)]
+    if recipe.episode_length:
+        cmd += ["--episode-length", str(recipe.episode_length)]
+    run(cmd, log)
+    return json.loads(path.read_text())
