@@ -1,0 +1,1 @@
+"""Learns: the learned baselines' recipes, their pipeline (demos, lerobot-train, colorsort-eval), reports, shipping."""
