@@ -22,7 +22,7 @@ BIN_COLORS: tuple[str, ...] = ("red", "green", "blue")
 class CellLayout:
     """Where things stand, in the world frame [m]; the robot base is at the origin on the floor.
 
-    The original cell (DESIGN.md) put the blue bin 0.88 m from the arm, beyond the IRB 140's
+    The original CoppeliaSim cell put the blue bin 0.88 m from the arm, beyond the IRB 140's
     0.81 m reach; this layout keeps its topology (belt on the arm's right running toward it,
     bins in front in a row 0.325 m apart along y) and moves everything within reach.
     """
