@@ -61,6 +61,10 @@ class Recipe:
         boxes_per_episode: boxes that leave the belt in one demo.
         steps: training updates of the largest set.
         small_steps: training updates of the smaller sets.
+        passes: when set, every set trains for this many passes over its frames instead
+            (updates = passes x frames / batch_size), so that a demo curve compares sets trained alike.
+        seeds: ``lerobot-train`` seeds; every set is trained (and scored) once per seed. The first
+            seed's policy is the one shipped and the one whose checkpoints make the learning curve.
         batch_size: samples per update.
         save_every: updates between checkpoints (the learning curve's points); 0: the last only.
         main_variant: the variant of the headline score, the demo curve and the learning curve.
@@ -81,6 +85,8 @@ class Recipe:
     boxes_per_episode: int = 3
     steps: int = 6000
     small_steps: int = 2500
+    passes: float | None = None
+    seeds: tuple[int, ...] = (1000,)
     batch_size: int = 64
     save_every: int = 0
     main_variant: str = "default"
@@ -112,6 +118,10 @@ class Recipe:
                     "image_size", "boxes_per_episode"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: give at least 1")
+        if self.passes is not None and not self.passes > 0:
+            raise ValueError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
+        if not self.seeds or len(set(self.seeds)) != len(self.seeds) or min(self.seeds) < 0:
+            raise ValueError(f"seeds={self.seeds}: give one or more distinct seeds, each 0 or more")
         if self.save_every < 0:
             raise ValueError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
 
@@ -131,6 +141,12 @@ class Recipe:
         for k in sorted(range(len(exact)), key=lambda k: counts[k] - exact[k])[: n - sum(counts)]:
             counts[k] += 1
         return {v: c for v, c in zip(self.train_variants, counts)}
+
+    def updates(self, n: int, frames: int) -> int:
+        """Training updates for the set of ``n`` demos holding ``frames`` frames."""
+        if self.passes is not None:
+            return max(1, round(self.passes * frames / self.batch_size))
+        return self.steps if n == self.demos[-1] else self.small_steps
 
     def episodes_on(self, variant: str) -> int:
         return self.eval_episodes if variant == self.main_variant else self.other_episodes
