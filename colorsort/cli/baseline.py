@@ -94,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
         for r in RECIPES.values():
             print(f"{r.name:<16} {r.label:<20} demos {','.join(map(str, r.demos))} from "
                   f"{'+'.join(r.train_variants)}, "
-                  f"{f'{r.passes:g} passes' if r.passes else f'{r.steps} updates'} x {len(r.seeds)} seeds on {r.device}")
+                  f"{f'{r.passes:g} passes' if r.passes else f'{r.steps} updates'} x {len(r.seeds)} seed{'s' if len(r.seeds) > 1 else ''} on {r.device}")
         return 0
     try:  # a bad number in --demos or a weight is a ValueError too
         recipe = get_recipe(args.recipe, **overrides(args))

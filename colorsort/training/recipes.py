@@ -6,6 +6,7 @@ or the simulator's box state), the ACT size and training length, and which varia
 
 - ``state``: the simulator's box state (``observation.environment_state``) and the arm's; no
   cameras. The policy in ``baselines/act-state``.
+- ``state-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
 - ``camera``: the ``sensor`` and ``wrist`` cameras at 64 px and ``observation.state`` only
   (joints, cup, suction, ray, belt): what a real cell has. ResNet-18 from scratch, on 2 CPU cores.
 - ``camera-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
@@ -154,6 +155,8 @@ class Recipe:
 
 RECIPES: dict[str, Recipe] = {r.name: r for r in (
     Recipe("state"),
+    Recipe("state-tracking", train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,), boxes_per_episode=5,
+           steps=3000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
     # every variant in the mix, yet few enough demos for ~8 passes over them in the hour: 115 demos
     # at 3000 updates (2.8 passes) scored 52% on default, 40 default-only demos at 3000 (7.7) 100%
     Recipe("camera", cameras=("sensor", "wrist"), image_size=64, batch_size=32,

@@ -148,7 +148,7 @@ def plot_curve(points: list[dict], label: str, variant: str, machine: str, path:
         ax.annotate(f"{p['step']}", (p["minutes"], 100 * p["success_rate"]), textcoords="offset points",
                     xytext=(5, -12), fontsize=7)
     ax.set_xlim(0, max(minutes) * 1.08)
-    ax.set_xlabel(f"training time [min] on {machine} (labels: updates)")
+    ax.set_xlabel(f"training [min], {machine}; labels: updates", fontsize=8)
     ax.set_ylabel(f"success on {variant} [%]")
     ax.set_title(f"{label} learning {variant}, {points[0]['episodes']} evaluation seeds per checkpoint", fontsize=9)
     _save(fig, path)
