@@ -27,25 +27,29 @@ def baseline(*args: str) -> list[str]:
 
 
 def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
-    """Two demo counts from two variants (merged with LeRobot's aggregate_datasets), 2 training steps each with a
-    checkpoint after each, one evaluation episode per variant, the learning curve; then the same command again
-    reuses every finished stage."""
+    """Two demo counts from two variants (merged with LeRobot's aggregate_datasets), each trained with two seeds for
+    2 steps with a checkpoint after each, one evaluation episode per variant, the learning curve of the first seed,
+    the table of mean and spread over seeds; then the same command again reuses every finished stage."""
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
     argv = baseline("--recipe", "state", "--demos", "2,3", "--train-variants", "default,distractors", "--steps", "2",
-                    "--small-steps", "2", "--save-every", "1", "--batch-size", "2", "--eval-variants", "default,jitter",
+                    "--small-steps", "2", "--seeds", "1000,1001", "--save-every", "1", "--batch-size", "2", "--eval-variants", "default,jitter",
                     "--eval-episodes", "1", "--other-episodes", "1", "--curve-episodes", "1",
                     "--episode-length", "10", "--workers", "1", "--envs", "1", "--out", str(out))
     first = run(argv + ["--ship", str(ship)], tmp_path, timeout=900)
     assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
 
     results = json.loads((out / "results.json").read_text())
-    assert [(r["demos"], r["variant"], r["steps"]) for r in results["rows"]] == [
-        (2, "default", 2), (3, "default", 2), (3, "jitter", 2)]
+    assert [(r["demos"], r["variant"], r["seed"], r["steps"]) for r in results["rows"]] == [
+        (2, "default", 1000, 2), (2, "default", 1001, 2), (3, "default", 1000, 2), (3, "jitter", 1000, 2),
+        (3, "default", 1001, 2), (3, "jitter", 1001, 2)]
     assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
     assert [p["step"] for p in results["curve"]] == [1, 2]
     assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
-    assert (out / "curve" / "demos-3-2steps-1.json").is_file()  # step 1 evaluated; step 2 is the full score's
+    assert (out / "curve" / "demos-3-2steps-seed1000-1.json").is_file()  # step 2's point is the full score's
+    assert not (out / "curve" / "demos-3-2steps-seed1001-1.json").exists()  # the curve is the first seed's
     assert "| default | ACT, state | 3 | 2 steps" in first.stdout
+    summary = first.stdout[first.stdout.index("success: mean (min-max over seeds)"):]
+    assert "| jitter | ACT, state | 3 | 2 steps" in summary and "0% (0-0%), 2 seeds | 0%, 0% | 1 |" in summary
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     merged = LeRobotDataset("local/colorsort-baseline", root=out / "data" / "demos-3")
@@ -65,7 +69,7 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
 
     again = run(argv, tmp_path, timeout=600)
     assert again.returncode == 0, again.stderr[-3000:]
-    assert again.stdout.count("reusing") == 2 + 2 + 3 + 1 and "lerobot-train" not in again.stdout
+    assert again.stdout.count("reusing") == 2 + 4 + 6 + 1 and "lerobot-train" not in again.stdout
     assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
 
 
@@ -121,6 +125,13 @@ def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_st
     camera = get_recipe("camera")
     assert camera.split(50) == {"default": 12, "lighting": 8, "jitter": 12, "distractors": 10, "fast": 8}
     assert sum(camera.split(7).values()) == 7
+    assert (camera.updates(50, 1000), camera.updates(10, 1000)) == (camera.steps, camera.small_steps)
+    trained_alike = get_recipe("state", demos=(8, 40), passes=10.0, batch_size=64)
+    assert (trained_alike.updates(8, 2560), trained_alike.updates(40, 12800)) == (400, 2000)
+    with pytest.raises(ValueError, match="seeds"):
+        get_recipe("state", seeds=(1, 1))
+    with pytest.raises(ValueError, match="passes"):
+        get_recipe("state", passes=0.0)
     for recipe in RECIPES.values():
         assert recipe.main_variant in recipe.eval_variants
     tracking = get_recipe("camera-tracking")

@@ -45,6 +45,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--boxes-per-episode", type=int)
     p.add_argument("--steps", type=int, help="training updates for the largest set")
     p.add_argument("--small-steps", type=int, help="training updates for the smaller sets")
+    p.add_argument("--passes", type=float, help="train every set for this many passes over its frames instead")
+    p.add_argument("--seeds", help="lerobot-train seeds, comma-separated: every set is trained once per seed")
     p.add_argument("--batch-size", type=int)
     p.add_argument("--save-every", type=int, help="updates between learning-curve checkpoints (0: none)")
     p.add_argument("--eval-variants", help="variants the largest set's policy is scored on, comma-separated")
@@ -72,11 +74,13 @@ def overrides(args: argparse.Namespace) -> dict:
     if args.train_variants:
         pairs = [item.partition(":") for item in args.train_variants.split(",")]
         found["train_mix"] = tuple((v, float(w) if w else 1.0) for v, _, w in pairs)
+    if args.seeds:
+        found["seeds"] = tuple(int(x) for x in args.seeds.split(","))
     if args.eval_variants:
         found["eval_variants"] = tuple(args.eval_variants.split(","))
     if args.cameras:
         found["cameras"] = () if args.cameras == "none" else tuple(args.cameras.split(","))
-    for key in ("boxes_per_episode", "steps", "small_steps", "batch_size", "save_every", "eval_episodes",
+    for key in ("boxes_per_episode", "steps", "small_steps", "passes", "batch_size", "save_every", "eval_episodes",
                 "other_episodes", "curve_episodes", "episode_length", "image_size", "device"):
         if getattr(args, key) is not None:
             found[key] = getattr(args, key)
@@ -89,7 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.list:
         for r in RECIPES.values():
             print(f"{r.name:<16} {r.label:<20} demos {','.join(map(str, r.demos))} from "
-                  f"{'+'.join(r.train_variants)}, {r.steps} updates on {r.device}")
+                  f"{'+'.join(r.train_variants)}, "
+                  f"{f'{r.passes:g} passes' if r.passes else f'{r.steps} updates'} x {len(r.seeds)} seed{'s' if len(r.seeds) > 1 else ''} on {r.device}")
         return 0
     try:  # a bad number in --demos or a weight is a ValueError too
         recipe = get_recipe(args.recipe, **overrides(args))

@@ -1,9 +1,10 @@
 """A learned baseline end to end: demos -> ``lerobot-train`` -> ``colorsort-eval`` -> table, plots, shipped policy.
 
-For each demo count of the recipe: collect (``stages.collect``), train (``stages.train``), score
-the largest set's policy on every evaluation variant and the smaller sets' on the main variant;
-then the learning curve (each earlier checkpoint of the largest set on the main variant's first
-``curve_episodes`` seeds; the last checkpoint's point is the first episodes of its full score).
+For each demo count of the recipe: collect (``stages.collect``); for each training seed, train
+(``stages.train``) and score the largest set's policies on every evaluation variant and the smaller
+sets' on the main variant; then the learning curve (each earlier checkpoint of the largest set's
+first seed on the main variant's first ``curve_episodes`` seeds; the last checkpoint's point is the
+first episodes of its full score).
 Finished stages are reused, so the pipeline can be rebuilt over several sittings.
 """
 
@@ -16,7 +17,7 @@ from pathlib import Path
 
 from colorsort.training import stages
 from colorsort.training.recipes import Recipe
-from colorsort.training.report import first_episodes, plot_curve, plot_demos, table
+from colorsort.training.report import first_episodes, plot_curve, plot_demos, summary_table, table
 from colorsort.training.ship import machine, ship
 
 UNTIL = ("data", "train", "eval")
@@ -53,29 +54,38 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     started, t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), time.perf_counter()
     rows: list[dict] = []
     curve: list[dict] = []
+    shipped: Path | None = None
     for n in recipe.demos:
         largest = n == recipe.demos[-1]
-        steps = recipe.steps if largest else recipe.small_steps
         data = stages.collect(recipe, n, out, settings.workers)
         if settings.until == "data":
             continue
-        run_dir, timing = stages.train(recipe, data, steps, out)
-        if settings.until == "train":
-            continue
+        frames = stages.frames(data)
+        steps = recipe.updates(n, frames)
         kept = json.loads((data / "meta" / "info.json").read_text())["total_episodes"]
-        last = run_dir / "checkpoints" / "last" / "pretrained_model"
-        for variant in recipe.eval_variants if largest else (recipe.main_variant,):
-            report = stages.evaluate(recipe, last, variant, recipe.episodes_on(variant),
-                                     out / "eval" / f"{run_dir.name}-{variant}.json", settings.envs,
-                                     out / "logs" / f"eval-{run_dir.name}-{variant}.log")
-            rows.append({"demos_tried": n, "demos": kept, "steps": steps, "train_minutes": timing["wall_s"] / 60,
-                         **report})
-            print(table([rows[-1]], recipe.label).splitlines()[-1], flush=True)
-        if largest and recipe.save_every:
-            curve = learning_curve(recipe, settings, run_dir, timing, rows[-len(recipe.eval_variants):])
+        for seed in recipe.seeds:
+            run_dir, timing = stages.train(recipe, data, steps, seed, out)
+            if settings.until == "train":
+                continue
+            last = run_dir / "checkpoints" / "last" / "pretrained_model"
+            scored = []
+            for variant in recipe.eval_variants if largest else (recipe.main_variant,):
+                report = stages.evaluate(recipe, last, variant, recipe.episodes_on(variant),
+                                         out / "eval" / f"{run_dir.name}-{variant}.json", settings.envs,
+                                         out / "logs" / f"eval-{run_dir.name}-{variant}.log")
+                scored.append({"demos_tried": n, "demos": kept, "frames": frames, "seed": seed, "steps": steps,
+                               "passes": round(steps * recipe.batch_size / frames, 1),
+                               "train_minutes": timing["wall_s"] / 60, **report})
+                print(table(scored[-1:], recipe.label).splitlines()[-1], flush=True)
+            rows += scored
+            if largest and seed == recipe.seeds[0]:
+                shipped = last
+                if recipe.save_every:
+                    curve = learning_curve(recipe, settings, run_dir, timing, scored, steps)
     if settings.until != "eval":
         print(f"stopped after the {settings.until!r} stage: {out}")
         return {}
+    assert shipped is not None
     plots = [out / "success_vs_demos.png"]
     plot_demos([r for r in rows if r["variant"] == recipe.main_variant], recipe.label, recipe.main_variant, plots[0])
     if curve:
@@ -85,21 +95,21 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     results = {"recipe": asdict(recipe), "command": command, "started": started, "wall_s": round(wall, 1),
                "rows": rows, "curve": curve}
     (out / "results.json").write_text(json.dumps(results, indent=1))
-    print(f"\n{table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\nresults: {out / 'results.json'}\n"
+    print(f"\n{summary_table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\nresults: {out / 'results.json'}\n"
           f"wall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
     if ship_to is not None:
-        ship(recipe, last, results, plots, ship_to, command)
+        ship(recipe, shipped, results, plots, ship_to, command)
     return results
 
 
 def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
-                   scored: list[dict]) -> list[dict]:
+                   scored: list[dict], steps: int) -> list[dict]:
     """Success on the main variant's first ``curve_episodes`` seeds at every checkpoint, with its training time."""
     final = next(r for r in scored if r["variant"] == recipe.main_variant)
     episodes = min(recipe.curve_episodes, final["episodes"])
     points = []
     for step, minutes, model in stages.checkpoints(run_dir, timing):
-        if step == recipe.steps:
+        if step == steps:
             report = final
         else:
             report = stages.evaluate(recipe, model, recipe.main_variant, episodes,

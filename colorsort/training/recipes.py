@@ -6,6 +6,7 @@ or the simulator's box state), the ACT size and training length, and which varia
 
 - ``state``: the simulator's box state (``observation.environment_state``) and the arm's; no
   cameras. The policy in ``baselines/act-state``.
+- ``state-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
 - ``camera``: the ``sensor`` and ``wrist`` cameras at 64 px and ``observation.state`` only
   (joints, cup, suction, ray, belt): what a real cell has. ResNet-18 from scratch, on 2 CPU cores.
 - ``camera-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
@@ -61,6 +62,10 @@ class Recipe:
         boxes_per_episode: boxes that leave the belt in one demo.
         steps: training updates of the largest set.
         small_steps: training updates of the smaller sets.
+        passes: when set, every set trains for this many passes over its frames instead
+            (updates = passes x frames / batch_size), so that a demo curve compares sets trained alike.
+        seeds: ``lerobot-train`` seeds; every set is trained (and scored) once per seed. The first
+            seed's policy is the one shipped and the one whose checkpoints make the learning curve.
         batch_size: samples per update.
         save_every: updates between checkpoints (the learning curve's points); 0: the last only.
         main_variant: the variant of the headline score, the demo curve and the learning curve.
@@ -81,6 +86,8 @@ class Recipe:
     boxes_per_episode: int = 3
     steps: int = 6000
     small_steps: int = 2500
+    passes: float | None = None
+    seeds: tuple[int, ...] = (1000,)
     batch_size: int = 64
     save_every: int = 0
     main_variant: str = "default"
@@ -112,6 +119,10 @@ class Recipe:
                     "image_size", "boxes_per_episode"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: give at least 1")
+        if self.passes is not None and not self.passes > 0:
+            raise ValueError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
+        if not self.seeds or len(set(self.seeds)) != len(self.seeds) or min(self.seeds) < 0:
+            raise ValueError(f"seeds={self.seeds}: give one or more distinct seeds, each 0 or more")
         if self.save_every < 0:
             raise ValueError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
 
@@ -132,12 +143,20 @@ class Recipe:
             counts[k] += 1
         return {v: c for v, c in zip(self.train_variants, counts)}
 
+    def updates(self, n: int, frames: int) -> int:
+        """Training updates for the set of ``n`` demos holding ``frames`` frames."""
+        if self.passes is not None:
+            return max(1, round(self.passes * frames / self.batch_size))
+        return self.steps if n == self.demos[-1] else self.small_steps
+
     def episodes_on(self, variant: str) -> int:
         return self.eval_episodes if variant == self.main_variant else self.other_episodes
 
 
 RECIPES: dict[str, Recipe] = {r.name: r for r in (
     Recipe("state"),
+    Recipe("state-tracking", train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,), boxes_per_episode=5,
+           steps=3000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
     # every variant in the mix, yet few enough demos for ~8 passes over them in the hour: 115 demos
     # at 3000 updates (2.8 passes) scored 52% on default, 40 default-only demos at 3000 (7.7) 100%
     Recipe("camera", cameras=("sensor", "wrist"), image_size=64, batch_size=32,

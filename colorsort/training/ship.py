@@ -10,7 +10,7 @@ import subprocess
 from pathlib import Path
 
 from colorsort.training.recipes import Recipe
-from colorsort.training.report import curve_table, table
+from colorsort.training.report import curve_table, summary_table, table
 from colorsort.variants import get_variant
 
 
@@ -46,7 +46,8 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     for p in plots:
         shutil.copy2(p, dest / p.name)
     (dest / "scores.json").write_text(json.dumps(results, indent=1))
-    largest = [r for r in results["rows"] if r["demos_tried"] == recipe.demos[-1]]
+    every_seed = [r for r in results["rows"] if r["demos_tried"] == recipe.demos[-1]]
+    largest = [r for r in every_seed if r.get("seed", recipe.seeds[0]) == recipe.seeds[0]]
     size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
     mix = ", ".join(f"{c} on {v}" for v, c in recipe.split(recipe.demos[-1]).items())
     inputs = (f"`observation.state` and the cameras {', '.join(recipe.cameras)} at {recipe.image_size} px, never "
@@ -58,6 +59,11 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     if results.get("curve"):
         curve = (f"\nLearning curve on `{recipe.main_variant}` (each checkpoint on the first {recipe.curve_episodes} "
                  f"evaluation seeds; `learning_curve.png`):\n\n{curve_table(results['curve'])}\n")
+    seeds = ""
+    if len(recipe.seeds) > 1:
+        seeds = (f"\nThe same data and updates with each of the recipe's {len(recipe.seeds)} training seeds "
+                 f"({', '.join(map(str, recipe.seeds))}; this policy is seed {recipe.seeds[0]}'s):\n\n"
+                 f"{summary_table(every_seed, recipe.label)}\n")
     cameras = ",".join(recipe.cameras) or "none"
     task = get_variant(recipe.main_variant).gym_id.removeprefix("colorsort/")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
@@ -84,6 +90,6 @@ HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task={task} --env.camer
 Scores (`colorsort-eval`, each variant's fixed evaluation seeds; `scores.json` holds them with every episode):
 
 {table(largest, recipe.label)}
-{curve}""")
+{seeds}{curve}""")
     print(f"shipped {dest} ({size_mb:.1f} MB)")
 

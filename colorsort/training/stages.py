@@ -4,7 +4,7 @@ Layout of the working folder ``out``::
 
     data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
-    train/demos-<N>-<S>steps/ lerobot-train's run; train/demos-<N>-<S>steps.json its timing
+    train/demos-<N>-<S>steps-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its timing
     eval/<run>-<variant>.json colorsort-eval's report of the run's last checkpoint
     curve/<run>-<step>.json   colorsort-eval's report of an earlier checkpoint (the learning curve)
     logs/                     each command's output
@@ -85,19 +85,24 @@ def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
     (root / "meta" / "complete").write_text("")
 
 
-def train_command(recipe: Recipe, data: Path, steps: int, run_dir: Path) -> list[str]:
-    """``lerobot-train`` of the recipe's ACT on ``data`` for ``steps`` updates into ``run_dir``."""
+def frames(data: Path) -> int:
+    """Frames in the LeRobot dataset at ``data``."""
+    return json.loads((data / "meta" / "info.json").read_text())["total_frames"]
+
+
+def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Path) -> list[str]:
+    """``lerobot-train`` of the recipe's ACT on ``data`` for ``steps`` updates with ``seed`` into ``run_dir``."""
     save_every = recipe.save_every if 0 < recipe.save_every < steps else steps
     return [str(BIN / "lerobot-train"), f"--dataset.repo_id={REPO_ID}", f"--dataset.root={data}",
             "--policy.type=act", f"--policy.device={recipe.device}", "--policy.push_to_hub=false",
             *recipe.act.args(), f"--batch_size={recipe.batch_size}", f"--steps={steps}",
-            f"--save_freq={save_every}", "--log_freq=200", "--num_workers=1", "--seed=1000",
+            f"--save_freq={save_every}", "--log_freq=200", "--num_workers=1", f"--seed={seed}",
             "--wandb.enable=false", f"--output_dir={run_dir}"]
 
 
-def train(recipe: Recipe, data: Path, steps: int, out: Path) -> tuple[Path, dict]:
+def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
     """``lerobot-train``; the run folder and its timing ``{"started": unix time, "wall_s": s}`` (reused if there)."""
-    run_dir = out / "train" / f"{data.name}-{steps}steps"
+    run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
     timing_path = run_dir.with_suffix(".json")
     if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
         print(f"reusing {run_dir}")
@@ -106,7 +111,7 @@ def train(recipe: Recipe, data: Path, steps: int, out: Path) -> tuple[Path, dict
         print(f"removing {run_dir}, an unfinished training run")
         shutil.rmtree(run_dir)
     started = time.time()
-    seconds = run(train_command(recipe, data, steps, run_dir), out / "logs" / f"train-{run_dir.name}.log")
+    seconds = run(train_command(recipe, data, steps, seed, run_dir), out / "logs" / f"train-{run_dir.name}.log")
     timing = {"started": started, "wall_s": round(seconds, 1)}
     timing_path.write_text(json.dumps(timing))
     return run_dir, timing
