@@ -85,7 +85,7 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     info = json.loads((out / "data" / "demos-1" / "meta" / "info.json").read_text())
     assert {"observation.images.sensor", "observation.images.wrist"} <= set(info["features"])
     assert "observation.environment_state" not in info["features"]
-    model = out / "train" / "demos-1-2steps" / "checkpoints" / "last" / "pretrained_model"
+    model = out / "train" / "demos-1-2steps-seed1000" / "checkpoints" / "last" / "pretrained_model"
     config = json.loads((model / "config.json").read_text())
     assert set(config["input_features"]) == {"observation.state", "observation.images.sensor",
                                              "observation.images.wrist"}
