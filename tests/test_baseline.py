@@ -99,7 +99,7 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     runner = _Runner(EvalSettings(str(model), "default", (32, 32), ("sensor", "wrist"), episode_length=3))
     obs, _ = runner.env.reset(seed=0)
     assert set(obs["pixels"]) == {"sensor", "wrist"} and obs["pixels"]["wrist"].shape == (32, 32, 3)
-    runner.env.close()
+    runner.close()
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "scene"]) == 2
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
 

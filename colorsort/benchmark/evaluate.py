@@ -39,16 +39,31 @@ class EvalSettings:
     image_size: tuple[int, int] = (128, 128)  # (height, width) [px]
     cameras: tuple[str, ...] = ("scene", "wrist")
     episode_length: int | None = None  # steps before truncation; None: the variant's time limit
+    torch_threads: int = 1  # a learned policy's CPU threads in each env's process
 
 
 class _Runner:
     """One env and one policy, built once per process, running episodes by seed."""
 
     def __init__(self, settings: EvalSettings):
+        self.threads_before: int | None = None
+        if settings.policy not in ("expert", "random"):
+            import torch
+
+            self.threads_before = torch.get_num_threads()
+            torch.set_num_threads(settings.torch_threads)
         self.policy = make_policy(settings.policy)
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
                                    image_size=settings.image_size, episode_length=settings.episode_length,
                                    render_mode=None)
+
+    def close(self) -> None:
+        """Close the env; give this process back the torch threads it had (it may be the caller's)."""
+        self.env.close()
+        if self.threads_before is not None:
+            import torch
+
+            torch.set_num_threads(self.threads_before)
 
     def episode(self, seed: int) -> dict:
         obs, info = self.env.reset(seed=seed)
@@ -87,7 +102,7 @@ def run_job(job: EvalJob, ctx: TaskContext) -> list[dict]:
             results.append(runner.episode(seed))
             ctx.send(job.settings.variant)
     finally:
-        runner.env.close()
+        runner.close()
     return results
 
 
