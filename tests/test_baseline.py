@@ -32,7 +32,8 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     the table of mean and spread over seeds; then the same command again reuses every finished stage."""
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
     argv = baseline("--recipe", "state", "--demos", "2,3", "--train-variants", "default,distractors", "--steps", "2",
-                    "--small-steps", "2", "--seeds", "1000,1001", "--save-every", "1", "--batch-size", "2", "--eval-variants", "default,jitter",
+                    "--small-steps", "2", "--seeds", "1000,1001", "--save-every", "1", "--batch-size", "2",
+                    "--eval-variants", "default,jitter",
                     "--eval-episodes", "1", "--other-episodes", "1", "--curve-episodes", "1",
                     "--episode-length", "10", "--workers", "1", "--envs", "1", "--out", str(out))
     first = run(argv + ["--ship", str(ship)], tmp_path, timeout=900)

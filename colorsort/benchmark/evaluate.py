@@ -39,7 +39,11 @@ class EvalSettings:
     image_size: tuple[int, int] = (128, 128)  # (height, width) [px]
     cameras: tuple[str, ...] = ("scene", "wrist")
     episode_length: int | None = None  # steps before truncation; None: the variant's time limit
-    torch_threads: int = 1  # a learned policy's CPU threads in each env's process
+
+
+# torch threads of a learned policy in each env's process: with torch's default (one per core) envs
+# sharing the cores fight over them, and the count changes a policy's floating-point results
+POLICY_THREADS = 1
 
 
 class _Runner:
@@ -51,7 +55,7 @@ class _Runner:
             import torch
 
             self.threads_before = torch.get_num_threads()
-            torch.set_num_threads(settings.torch_threads)
+            torch.set_num_threads(POLICY_THREADS)
         self.policy = make_policy(settings.policy)
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
                                    image_size=settings.image_size, episode_length=settings.episode_length,

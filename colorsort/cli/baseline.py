@@ -92,9 +92,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     if args.list:
         for r in RECIPES.values():
+            length = f"{r.passes:g} passes" if r.passes else f"{r.steps} updates"
+            seeds = f"{len(r.seeds)} seed" + ("s" if len(r.seeds) > 1 else "")
             print(f"{r.name:<16} {r.label:<20} demos {','.join(map(str, r.demos))} from "
-                  f"{'+'.join(r.train_variants)}, "
-                  f"{f'{r.passes:g} passes' if r.passes else f'{r.steps} updates'} x {len(r.seeds)} seed{'s' if len(r.seeds) > 1 else ''} on {r.device}")
+                  f"{'+'.join(r.train_variants)}, {length} x {seeds} on {r.device}")
         return 0
     try:  # a bad number in --demos or a weight is a ValueError too
         recipe = get_recipe(args.recipe, **overrides(args))

@@ -60,9 +60,8 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
         data = stages.collect(recipe, n, out, settings.workers)
         if settings.until == "data":
             continue
-        frames = stages.frames(data)
+        kept, frames = stages.size(data)
         steps = recipe.updates(n, frames)
-        kept = json.loads((data / "meta" / "info.json").read_text())["total_episodes"]
         for seed in recipe.seeds:
             run_dir, timing = stages.train(recipe, data, steps, seed, out)
             if settings.until == "train":
@@ -95,8 +94,8 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     results = {"recipe": asdict(recipe), "command": command, "started": started, "wall_s": round(wall, 1),
                "rows": rows, "curve": curve}
     (out / "results.json").write_text(json.dumps(results, indent=1))
-    print(f"\n{summary_table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\nresults: {out / 'results.json'}\n"
-          f"wall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
+    print(f"\n{summary_table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\n"
+          f"results: {out / 'results.json'}\nwall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
     if ship_to is not None:
         ship(recipe, shipped, results, plots, ship_to, command)
     return results

@@ -10,16 +10,16 @@ COLUMNS = ("variant", "policy", "demos", "training", "success rate (95% CI)", "c
            "distractors let through", "boxes/min", "mean cycle [s]")
 
 
-def training_cell(steps: int, minutes: float, passes: float | None = None, seed: int | None = None) -> str:
-    """"3600 steps (7.8 passes), seed 1000, 46 min": what a row's policy was trained with, and for how long."""
-    text = f"{steps} steps" + (f" ({passes:.1f} passes)" if passes is not None else "")
-    return text + (f", seed {seed}" if seed is not None else "") + f", {minutes:.0f} min"
+def updates(r: dict) -> str:
+    """"3600 steps (7.8 passes)": a row's training updates, and the passes over its data they made."""
+    return f"{r['steps']} steps" + (f" ({r['passes']:.1f} passes)" if r.get("passes") is not None else "")
 
 
 def row_cells(r: dict, label: str) -> list[str]:
     lo, hi = r["success_ci95"]
     cycle = f"{r['mean_cycle_time_s']:.2f}" if r["mean_cycle_time_s"] is not None else "-"
-    training = training_cell(r["steps"], r["train_minutes"], r.get("passes"), r.get("seed"))
+    seed = f", seed {r['seed']}" if "seed" in r else ""
+    training = f"{updates(r)}{seed}, {r['train_minutes']:.0f} min"
     return [r["variant"], label, str(r["demos"]), training,
             f"{100 * r['success_rate']:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%), {r['episodes']} ep.",
             str(r["correct"]), str(r["misplaced"]), str(r["dropped"]),
@@ -50,8 +50,7 @@ def summary_table(rows: list[dict], label: str) -> str:
     for g in groups.values():
         rates = [100 * r["success_rate"] for r in g]
         minutes = f"{min(r['train_minutes'] for r in g):.0f}-{max(r['train_minutes'] for r in g):.0f}"
-        passes = f" ({g[0]['passes']:.1f} passes)" if g[0].get("passes") is not None else ""
-        cells = [g[0]["variant"], label, str(g[0]["demos"]), f"{g[0]['steps']} steps{passes}, {minutes} min",
+        cells = [g[0]["variant"], label, str(g[0]["demos"]), f"{updates(g[0])}, {minutes} min",
                  f"{sum(rates) / len(rates):.0f}% ({min(rates):.0f}-{max(rates):.0f}%), {len(g)} seeds",
                  ", ".join(f"{x:.0f}%" for x in rates), str(g[0]["episodes"]),
                  *(str(sum(r[k] for r in g)) for k in ("correct", "misplaced", "dropped"))]
@@ -123,8 +122,7 @@ def plot_demos(rows: list[dict], label: str, variant: str, path: Path) -> None:
         ax.legend(fontsize=7)
     for x in n:
         r = groups[x][0]
-        passes = f" ({r['passes']:.1f} passes)" if r.get("passes") is not None else ""
-        ax.annotate(f"{r['steps']} steps{passes}", (x, 100 * r["success_rate"]), textcoords="offset points",
+        ax.annotate(updates(r), (x, 100 * r["success_rate"]), textcoords="offset points",
                     xytext=(6, -12), fontsize=7)
     ax.set_xscale("log")
     ax.set_xticks(n, [str(x) for x in n])

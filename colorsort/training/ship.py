@@ -47,7 +47,7 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
         shutil.copy2(p, dest / p.name)
     (dest / "scores.json").write_text(json.dumps(results, indent=1))
     every_seed = [r for r in results["rows"] if r["demos_tried"] == recipe.demos[-1]]
-    largest = [r for r in every_seed if r.get("seed", recipe.seeds[0]) == recipe.seeds[0]]
+    largest = [r for r in every_seed if r["seed"] == recipe.seeds[0]]
     size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
     mix = ", ".join(f"{c} on {v}" for v, c in recipe.split(recipe.demos[-1]).items())
     inputs = (f"`observation.state` and the cameras {', '.join(recipe.cameras)} at {recipe.image_size} px, never "

@@ -85,9 +85,10 @@ def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
     (root / "meta" / "complete").write_text("")
 
 
-def frames(data: Path) -> int:
-    """Frames in the LeRobot dataset at ``data``."""
-    return json.loads((data / "meta" / "info.json").read_text())["total_frames"]
+def size(data: Path) -> tuple[int, int]:
+    """(episodes, frames) of the LeRobot dataset at ``data``."""
+    info = json.loads((data / "meta" / "info.json").read_text())
+    return info["total_episodes"], info["total_frames"]
 
 
 def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Path) -> list[str]:
