@@ -179,3 +179,29 @@ def test_readmes_recipe_list_runs_verbatim():
     result = run(baseline("--list"), REPO, timeout=120)
     assert result.returncode == 0, result.stderr
     assert [line.split()[0] for line in result.stdout.splitlines()] == list(RECIPES)
+
+
+def test_docs_tables_are_the_ones_scores_json_gives():
+    """Every scores block in README and docs/ is what `python demos/baseline_tables.py` writes from its JSON;
+    every shipped baseline with scores.json has its table in the docs."""
+    from colorsort.training.tables import fill, pages
+
+    text = {page: page.read_text() for page in pages(REPO)}
+    for page, body in text.items():
+        assert fill(body, REPO) == body, f"{page} is stale: run python demos/baseline_tables.py"
+    for name, path in SHIPPED.items():
+        if (path / "scores.json").is_file():
+            assert any(f"<!-- scores baselines/{name} table -->" in t for t in text.values()), name
+
+
+def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
+    from colorsort.training.tables import fill
+
+    stale = "before\n<!-- scores baselines/act-camera curve -->\n| old | numbers |\n<!-- end scores -->\nafter\n"
+    new = fill(stale, REPO)
+    assert "| old |" not in new and "| updates | training [min] |" in new
+    assert new.startswith("before\n") and new.endswith("<!-- end scores -->\nafter\n") and fill(new, REPO) == new
+    with pytest.raises(ValueError, match="Valid kinds"):
+        fill("<!-- scores baselines/act-camera plot -->\n<!-- end scores -->", REPO)
+    with pytest.raises(ValueError, match="no scores.json"):
+        fill("<!-- scores baselines/nothing table -->\n<!-- end scores -->", REPO)

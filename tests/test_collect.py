@@ -194,3 +194,41 @@ def test_a_variant_and_a_preset_or_robot_are_not_given_together(capsys):
         CollectConfig(variant="robots-panda")  # robot IRB140 by default, the variant's is Panda
     with pytest.raises(ValueError, match="Valid variants"):
         CollectConfig(variant="nope")
+
+
+def test_late_pass_holds_the_belt_back_and_stores_the_experts_action(tmp_path):
+    """Seed 2 of distractors starts with a purple box: the expert lets it through at once; with
+    --late-pass the belt stays stopped for the drawn steps while the stored action says belt-pass."""
+    from colorsort.data.late_pass import LatePass
+
+    def late_frames(late_pass):
+        out = tmp_path / f"late{late_pass}"
+        summary = collect(CollectConfig(variant="distractors", episodes=1, seed=2, cameras=(), late_pass=late_pass,
+                                        out=str(out)), progress=False, log=lambda _: None)
+        assert summary.kept == 1  # the purple box left the belt; nothing was misplaced or dropped
+        table = data_table(out)
+        state, action = np.array(table["observation.state"]), np.array(table["action"])
+        ray, running = state[:, -2] > 0.5, state[:, -1] > 0.5
+        return int(np.sum((action[:, -1] > 0) & ray & ~running)), int(np.sum(action[:, -1] > 0))
+
+    drawn = LatePass(9)
+    drawn.reset(2)
+    delay = int(drawn.rng.integers(0, 10))
+    assert delay > 0
+    (plain_late, plain_on), (late, on) = late_frames(0), late_frames(9)
+    assert plain_late == 1  # the expert's own let-through: one frame of "box at the ray, belt stopped"
+    assert late == 1 + delay  # then `delay` more, each labelled belt-pass
+    assert plain_on + delay <= on <= plain_on + delay + 1  # the box clears the ray a step later at most
+
+
+def test_late_pass_is_off_by_default_and_validated():
+    from colorsort.data.late_pass import LatePass
+
+    action = np.array([0.1, -1.0, 1.0], np.float32)
+    off = LatePass(0)
+    off.reset(0)
+    assert all(off.executed(action) is action for _ in range(5))
+    with pytest.raises(ValueError, match="late_pass"):
+        CollectConfig(late_pass=-1)
+    with pytest.raises(ValueError, match="late_pass"):
+        LatePass(-1)

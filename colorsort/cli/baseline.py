@@ -43,6 +43,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--train-variants", help="variants the demos come from, comma-separated, each optionally "
                                             "VARIANT:WEIGHT (default: the recipe's mix)")
     p.add_argument("--boxes-per-episode", type=int)
+    p.add_argument("--late-pass", type=int, help="colorsort-collect's --late-pass for the demos [control steps]")
     p.add_argument("--steps", type=int, help="training updates for the largest set")
     p.add_argument("--small-steps", type=int, help="training updates for the smaller sets")
     p.add_argument("--passes", type=float, help="train every set for this many passes over its frames instead")
@@ -80,8 +81,8 @@ def overrides(args: argparse.Namespace) -> dict:
         found["eval_variants"] = tuple(args.eval_variants.split(","))
     if args.cameras:
         found["cameras"] = () if args.cameras == "none" else tuple(args.cameras.split(","))
-    for key in ("boxes_per_episode", "steps", "small_steps", "passes", "batch_size", "save_every", "eval_episodes",
-                "other_episodes", "curve_episodes", "episode_length", "image_size", "device"):
+    for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",
+                "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size", "device"):
         if getattr(args, key) is not None:
             found[key] = getattr(args, key)
     return found

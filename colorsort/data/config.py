@@ -35,6 +35,7 @@ class CollectConfig:
     retries: int = 2  # re-runs of a shard whose worker process died
     address: str | None = None  # ray only: the cluster to join ("auto"); None starts one on this machine
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
+    late_pass: int = 0  # [control steps] hold each belt-pass back 0..late_pass steps; stored actions stay the expert's (late_pass.py)
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
 
@@ -58,6 +59,7 @@ class CollectConfig:
         check_range("boxes_per_episode", self.boxes_per_episode, 1, 100)
         self.executor_config  # noqa: B018 - validates executor, workers, retries and address
         check_range("shard_size", self.shard_size, 1, 100_000)
+        check_range("late_pass", self.late_pass, 0, 100)
         if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
             raise ValueError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
         if self.seed < 0:
@@ -67,7 +69,8 @@ class CollectConfig:
 
     def settings(self) -> dict:
         """The settings every episode of one dataset must share (checked on --resume)."""
-        keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps", "vcodec")
+        keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps", "vcodec",
+                "late_pass")
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
 
     @property

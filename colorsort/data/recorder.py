@@ -19,6 +19,7 @@ from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import judge
 from colorsort.config import sorting_time_limit
 from colorsort.data.config import CollectConfig
+from colorsort.data.late_pass import LatePass
 from colorsort.data.schema import features, frame, task_text
 from colorsort.expert.sorter import SortingExpert
 from colorsort.variants import get_variant
@@ -86,6 +87,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     t0 = time.perf_counter()
     env = make_recording_env(config)
     expert = SortingExpert.from_env(env)
+    late = LatePass(config.late_pass)
     lighting = get_variant(config.variant).lighting if config.variant else None
     out.sim_state = env.sim_state_layout.describe()
     dataset = LeRobotDataset.create(
@@ -101,6 +103,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
             seed = config.seed + index
             obs = env.reset(seed=seed, lighting=lighting)  # as the benchmark's gym env: same seed, same episode
             expert.reset(obs)
+            late.reset(seed)
             first = min(env.boxes_in_play(), key=lambda b: b.serial)
             task = task_text(first.color, k)
             frames = 0
@@ -109,11 +112,12 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                     raise _Stopped
                 t = time.perf_counter()
                 action = expert.act(obs).astype(np.float32)  # stored as float32: the env consumes exactly that
+                executed = late.executed(action)  # the action itself unless a belt-pass is held back
                 t_act = time.perf_counter()
                 dataset.add_frame(frame(env, obs, action, config.cameras, task))
                 t_add = time.perf_counter()
                 render_before = env.render_seconds
-                obs, _, _, _ = env.step(action)
+                obs, _, _, _ = env.step(executed)
                 t_step = time.perf_counter()
                 rendered = env.render_seconds - render_before
                 sec["expert"] += t_act - t

@@ -60,6 +60,8 @@ class Recipe:
         train_mix: (variant, weight) pairs: each demo count is split over them in proportion.
         demos: increasing demo counts; the largest trains the shipped policy.
         boxes_per_episode: boxes that leave the belt in one demo.
+        late_pass: the collector's ``--late-pass`` [control steps]: demos that show the states a
+            chunking policy reaches when it lets a box through late (``colorsort.data.late_pass``).
         steps: training updates of the largest set.
         small_steps: training updates of the smaller sets.
         passes: when set, every set trains for this many passes over its frames instead
@@ -84,6 +86,7 @@ class Recipe:
     train_mix: tuple[tuple[str, float], ...] = (("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 1))
     demos: tuple[int, ...] = (8, 40, 200)
     boxes_per_episode: int = 3
+    late_pass: int = 0
     steps: int = 6000
     small_steps: int = 2500
     passes: float | None = None
@@ -119,6 +122,8 @@ class Recipe:
                     "image_size", "boxes_per_episode"):
             if getattr(self, key) < 1:
                 raise ValueError(f"{key}={getattr(self, key)}: give at least 1")
+        if not 0 <= self.late_pass <= 100:
+            raise ValueError(f"late_pass={self.late_pass}: give 0 (off) to 100 control steps")
         if self.passes is not None and not self.passes > 0:
             raise ValueError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds) or min(self.seeds) < 0:
@@ -148,6 +153,11 @@ class Recipe:
         if self.passes is not None:
             return max(1, round(self.passes * frames / self.batch_size))
         return self.steps if n == self.demos[-1] else self.small_steps
+
+    @property
+    def data_suffix(self) -> str:
+        """What sets this recipe's demos apart from plain expert demos in folder names."""
+        return f"-late{self.late_pass}" if self.late_pass else ""
 
     def episodes_on(self, variant: str) -> int:
         return self.eval_episodes if variant == self.main_variant else self.other_episodes

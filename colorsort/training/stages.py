@@ -2,7 +2,7 @@
 
 Layout of the working folder ``out``::
 
-    data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant
+    data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-late<L>: --late-pass L)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
     train/demos-<N>-<S>steps-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its timing
     eval/<run>-<variant>.json colorsort-eval's report of the run's last checkpoint
@@ -47,20 +47,21 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     Demo i of training variant k has seed ``k * SEED_STRIDE + i``, so a smaller set's parts are the
     first episodes of a larger one's. With cameras the merged set loses ``observation.environment_state``:
     a camera policy must see the boxes, not read them from the simulator."""
-    root = out / "data" / f"demos-{n}"
+    root = out / "data" / f"demos-{n}{recipe.data_suffix}"
     if (root / "meta" / "info.json").is_file() and (root / "meta" / "complete").is_file():
         print(f"reusing {root}")
         return root
     parts = []
     for k, (variant, count) in enumerate(recipe.split(n).items()):
-        part = out / "data" / f"{variant}-{count}"
+        part = out / "data" / f"{variant}-{count}{recipe.data_suffix}"
         if not (part / "meta" / "colorsort.json").is_file():
             shutil.rmtree(part, ignore_errors=True)
             run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
                  "--boxes-per-episode", str(recipe.boxes_per_episode), "--seed", str(SEED_STRIDE * k),
                  "--cameras", ",".join(recipe.cameras) or "none", "--image-size", str(recipe.image_size),
-                 "--workers", str(workers), "--out", str(part), "--repo-id", REPO_ID],
-                out / "logs" / f"collect-{variant}-{count}.log")
+                 "--late-pass", str(recipe.late_pass), "--workers", str(workers), "--out", str(part),
+                 "--repo-id", REPO_ID],
+                out / "logs" / f"collect-{part.name}.log")
         else:
             print(f"reusing {part}")
         parts.append(part)
