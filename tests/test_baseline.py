@@ -205,3 +205,11 @@ def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
         fill("<!-- scores baselines/act-camera plot -->\n<!-- end scores -->", REPO)
     with pytest.raises(ValueError, match="no scores.json"):
         fill("<!-- scores baselines/nothing table -->\n<!-- end scores -->", REPO)
+
+
+@pytest.mark.parametrize("variant", ["robots-panda", "tracking"])
+def test_a_checkpoint_on_a_variant_it_does_not_fit_gets_a_one_line_error(variant, capsys):
+    """act-state takes 23 state inputs: the Panda's state has 25, a tracking belt's 24."""
+    assert eval_main(["--policy", str(SHIPPED["act-state"]), "--variant", variant, "--episodes", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"cannot run on {variant}" in err and "'default'" in err

@@ -95,7 +95,10 @@ def main(argv: list[str] | None = None) -> int:
 def variant_names(policy: str, variant: str) -> list[str]:
     """``[variant]``, or for ``all`` every variant the policy fits (the others are named on stderr)."""
     if variant != "all":
-        get_variant(variant)
+        reason = misfit(policy, get_variant(variant))
+        if reason:
+            fits = [v.name for v in VARIANTS.values() if not misfit(policy, v)]
+            raise ValueError(f"{policy} cannot run on {variant}: {reason}; variants it fits: {fits}")
         return [variant]
     names = []
     for v in VARIANTS.values():
