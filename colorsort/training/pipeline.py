@@ -70,7 +70,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             scored = []
             for variant in recipe.eval_variants if largest else (recipe.main_variant,):
                 report = stages.evaluate(recipe, last, variant, recipe.episodes_on(variant),
-                                         out / "eval" / f"{run_dir.name}-{variant}.json", settings.envs,
+                                         out / "eval" / f"{run_dir.name}-{recipe.act.execution}-{variant}.json", settings.envs,
                                          out / "logs" / f"eval-{run_dir.name}-{variant}.log")
                 scored.append({"demos_tried": n, "demos": kept, "frames": frames, "seed": seed, "steps": steps,
                                "passes": round(steps * recipe.batch_size / frames, 1),
@@ -112,7 +112,7 @@ def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing:
             report = final
         else:
             report = stages.evaluate(recipe, model, recipe.main_variant, episodes,
-                                     settings.out / "curve" / f"{run_dir.name}-{step}.json", settings.envs,
+                                     settings.out / "curve" / f"{run_dir.name}-{recipe.act.execution}-{step}.json", settings.envs,
                                      settings.out / "logs" / f"curve-{run_dir.name}-{step}.log")
         points.append({"step": step, "minutes": round(minutes, 1), **first_episodes(report, episodes)})
     return points

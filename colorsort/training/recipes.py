@@ -32,11 +32,33 @@ class ActSettings:
     n_encoder_layers: int = 2
     n_decoder_layers: int = 1
     chunk_size: int = 20  # actions predicted per inference [steps of 50 ms]
-    n_action_steps: int = 10  # of which the first are executed before the policy looks again
+    # Every step's action is the average of every chunk's prediction for it (ACT's temporal
+    # ensembling, weights exp(-coeff * age)): executing 10 of each chunk open-loop, the camera
+    # policy met no box on the moving belt (0 of 50 on tracking) because its cup stopped ~1 cm above it.
+    n_action_steps: int = 1  # actions executed per inference (1 with temporal ensembling)
+    temporal_ensemble_coeff: float | None = 0.01  # None: execute n_action_steps of each chunk open-loop
     use_vae: bool = False  # the expert is deterministic: one mode per state, nothing for a latent to explain
     optimizer_lr: float = 1e-4  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
     optimizer_lr_backbone: float = 1e-4
     pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.n_action_steps <= self.chunk_size:
+            raise ValueError(f"n_action_steps={self.n_action_steps}: give 1 to chunk_size ({self.chunk_size})")
+        if self.temporal_ensemble_coeff is not None and self.n_action_steps != 1:
+            raise ValueError(f"temporal_ensemble_coeff={self.temporal_ensemble_coeff} needs n_action_steps=1 "
+                             f"(got {self.n_action_steps}); or set temporal_ensemble_coeff=None")
+
+    @property
+    def execution(self) -> str:
+        """How the chunks are executed, for file names: ``ens0.01`` or ``chunk10``."""
+        if self.temporal_ensemble_coeff is not None:
+            return f"ens{self.temporal_ensemble_coeff:g}"
+        return f"chunk{self.n_action_steps}"
+
+    def inference(self) -> dict[str, float | int | None]:
+        """The settings that change how a trained ACT acts but not what it learns."""
+        return {"n_action_steps": self.n_action_steps, "temporal_ensemble_coeff": self.temporal_ensemble_coeff}
 
     def args(self) -> list[str]:
         text = {True: "true", False: "false", None: "null"}

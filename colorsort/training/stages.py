@@ -5,8 +5,9 @@ Layout of the working folder ``out``::
     data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-late<L>: --late-pass L)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
     train/demos-<N>-<S>steps-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its timing
-    eval/<run>-<variant>.json colorsort-eval's report of the run's last checkpoint
-    curve/<run>-<step>.json   colorsort-eval's report of an earlier checkpoint (the learning curve)
+    eval/<run>-<exec>-<variant>.json  colorsort-eval's report of the run's last checkpoint, executing its
+                              chunks as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
+    curve/<run>-<exec>-<step>.json    colorsort-eval's report of an earlier checkpoint (the learning curve)
     logs/                     each command's output
 """
 
@@ -108,6 +109,7 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
     timing_path = run_dir.with_suffix(".json")
     if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
         print(f"reusing {run_dir}")
+        set_inference(run_dir, recipe)
         return run_dir, json.loads(timing_path.read_text())
     if run_dir.exists():
         print(f"removing {run_dir}, an unfinished training run")
@@ -117,6 +119,22 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
     timing = {"started": started, "wall_s": round(seconds, 1)}
     timing_path.write_text(json.dumps(timing))
     return run_dir, timing
+
+
+def set_inference(run_dir: Path, recipe: Recipe) -> None:
+    """Give every checkpoint of a reused run the recipe's inference settings (``ActSettings.inference``).
+
+    They decide how the policy executes its chunks, not its weights (``lerobot-train`` reads neither),
+    so a run trained under other inference settings is the run the recipe would train.
+    """
+    wanted = recipe.act.inference()
+    for config in sorted(run_dir.glob("checkpoints/*/pretrained_model/config.json")):
+        if config.parent.parent.is_symlink():
+            continue
+        data = json.loads(config.read_text())
+        if {k: data.get(k) for k in wanted} != wanted:
+            print(f"{config}: inference settings {wanted}")
+            config.write_text(json.dumps({**data, **wanted}, indent=4))
 
 
 def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
