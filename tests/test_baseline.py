@@ -46,8 +46,8 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
     assert [p["step"] for p in results["curve"]] == [1, 2]
     assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
-    assert (out / "curve" / "demos-3-2steps-seed1000-ens0.01-1.json").is_file()  # step 2's point is the full score's
-    assert not (out / "curve" / "demos-3-2steps-seed1001-ens0.01-1.json").exists()  # the curve is the first seed's
+    assert (out / "curve" / "demos-3-2steps-seed1000-chunk10-1.json").is_file()  # step 2's point is the full score's
+    assert not (out / "curve" / "demos-3-2steps-seed1001-chunk10-1.json").exists()  # the curve is the first seed's
     assert "| default | ACT, state | 3 | 2 steps" in first.stdout
     summary = first.stdout[first.stdout.index("success: mean (min-max over seeds)"):]
     assert "| jitter | ACT, state | 3 | 2 steps" in summary and "0% (0-0%), 2 seeds | 0%, 0% | 1 |" in summary
@@ -139,8 +139,10 @@ def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_st
     assert set(tracking.eval_variants) == {"tracking", "tracking-jitter", "tracking-fast"} and tracking.cameras
 
 
-def test_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_the_recipes_inference_settings(tmp_path):
-    """Training never reads n_action_steps or temporal_ensemble_coeff, so a reused run (trained with other values)
+def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_the_recipes_inference_settings(
+        tmp_path):
+    """On the moving belt ACT averages its chunks; the stopping belt's recipes execute 10 actions open-loop.
+    Training never reads n_action_steps or temporal_ensemble_coeff, so a reused run (trained with other values)
     gets the recipe's in every checkpoint's config, and its evaluations are filed under the new execution."""
     from colorsort.training.recipes import ActSettings
     from colorsort.training.stages import set_inference
@@ -148,11 +150,12 @@ def test_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_the_recipes
     act = get_recipe("camera-tracking").act
     assert (act.n_action_steps, act.temporal_ensemble_coeff, act.execution) == (1, 0.01, "ens0.01")
     assert "--policy.temporal_ensemble_coeff=0.01" in act.args() and "--policy.n_action_steps=1" in act.args()
-    assert ActSettings(n_action_steps=10, temporal_ensemble_coeff=None).execution == "chunk10"
+    assert get_recipe("state").act.execution == get_recipe("camera").act.execution == "chunk10"
+    assert get_recipe("state-tracking").act == act
     with pytest.raises(ValueError, match="n_action_steps=1"):
-        ActSettings(n_action_steps=10)
+        ActSettings(n_action_steps=10, temporal_ensemble_coeff=0.01)
     with pytest.raises(ValueError, match="chunk_size"):
-        ActSettings(n_action_steps=30, temporal_ensemble_coeff=None)
+        ActSettings(n_action_steps=30)
 
     run_dir = tmp_path / "run"
     for step in ("000001", "000002"):
@@ -160,11 +163,14 @@ def test_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_the_recipes
         model.mkdir(parents=True)
         (model / "config.json").write_text(json.dumps({"type": "act", "dim_model": 128, "n_action_steps": 10,
                                                        "temporal_ensemble_coeff": None}))
+        (model / "train_config.json").write_text(json.dumps({"steps": 2, "policy": {"n_action_steps": 10}}))
     (run_dir / "checkpoints" / "last").symlink_to("000002")
     set_inference(run_dir, get_recipe("camera-tracking"))
     for step in ("000001", "000002", "last"):
         config = json.loads((run_dir / "checkpoints" / step / "pretrained_model" / "config.json").read_text())
         assert config == {"type": "act", "dim_model": 128, "n_action_steps": 1, "temporal_ensemble_coeff": 0.01}
+        train_config = json.loads((run_dir / "checkpoints" / step / "pretrained_model" / "train_config.json").read_text())
+        assert train_config == {"steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.01}}
 
 
 @pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])

@@ -69,9 +69,9 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             last = run_dir / "checkpoints" / "last" / "pretrained_model"
             scored = []
             for variant in recipe.eval_variants if largest else (recipe.main_variant,):
+                name = f"{run_dir.name}-{recipe.act.execution}-{variant}"
                 report = stages.evaluate(recipe, last, variant, recipe.episodes_on(variant),
-                                         out / "eval" / f"{run_dir.name}-{recipe.act.execution}-{variant}.json", settings.envs,
-                                         out / "logs" / f"eval-{run_dir.name}-{variant}.log")
+                                         out / "eval" / f"{name}.json", settings.envs, out / "logs" / f"eval-{name}.log")
                 scored.append({"demos_tried": n, "demos": kept, "frames": frames, "seed": seed, "steps": steps,
                                "passes": round(steps * recipe.batch_size / frames, 1),
                                "train_minutes": timing["wall_s"] / 60, **report})
@@ -111,8 +111,8 @@ def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing:
         if step == steps:
             report = final
         else:
-            report = stages.evaluate(recipe, model, recipe.main_variant, episodes,
-                                     settings.out / "curve" / f"{run_dir.name}-{recipe.act.execution}-{step}.json", settings.envs,
-                                     settings.out / "logs" / f"curve-{run_dir.name}-{step}.log")
+            name = f"{run_dir.name}-{recipe.act.execution}-{step}"
+            report = stages.evaluate(recipe, model, recipe.main_variant, episodes, settings.out / "curve" / f"{name}.json",
+                                     settings.envs, settings.out / "logs" / f"curve-{name}.log")
         points.append({"step": step, "minutes": round(minutes, 1), **first_episodes(report, episodes)})
     return points

@@ -128,13 +128,19 @@ def set_inference(run_dir: Path, recipe: Recipe) -> None:
     so a run trained under other inference settings is the run the recipe would train.
     """
     wanted = recipe.act.inference()
-    for config in sorted(run_dir.glob("checkpoints/*/pretrained_model/config.json")):
-        if config.parent.parent.is_symlink():
+    for model in sorted(run_dir.glob("checkpoints/*/pretrained_model")):
+        if model.parent.is_symlink():
             continue
-        data = json.loads(config.read_text())
-        if {k: data.get(k) for k in wanted} != wanted:
-            print(f"{config}: inference settings {wanted}")
-            config.write_text(json.dumps({**data, **wanted}, indent=4))
+        for name, section in (("config.json", None), ("train_config.json", "policy")):
+            path = model / name
+            if not path.is_file():
+                continue
+            data = json.loads(path.read_text())
+            settings = data if section is None else data[section]
+            if {k: settings.get(k) for k in wanted} != wanted:
+                print(f"{path}: inference settings {wanted}")
+                settings.update(wanted)
+                path.write_text(json.dumps(data, indent=4))
 
 
 def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
