@@ -36,6 +36,7 @@ demo: $(STAMP)
 	@echo "  outputs/eval_expert_default.json      the expert on the benchmark's default variant (3 episodes)"
 
 test: $(STAMP)
+	$(VENV)/bin/ruff check .
 	$(VENV)/bin/python -m pytest -q tests
 
 bench: $(STAMP)

@@ -6,8 +6,8 @@ and the Gymnasium ids ``colorsort/ColorSort-v0`` and one per benchmark variant
 (``colorsort.variants``), so that ``gym.make("colorsort/ColorSort-v0")`` works.
 """
 
-from colorsort.logs import quiet_robosuite_startup
 from colorsort.cell.rendering import ensure_gl_backend, gl_error, is_gl_failure
+from colorsort.logs import quiet_robosuite_startup
 
 ensure_gl_backend()  # before robosuite imports mujoco's renderer
 quiet_robosuite_startup()  # before robosuite logs its import-time notices

@@ -51,7 +51,7 @@ class Variant:
 
     def __post_init__(self) -> None:
         get_robot(self.robot)  # validates the robot
-        self.task_config  # validates the preset and overrides
+        _ = self.task_config  # validates the preset and overrides
 
     @property
     def task_config(self) -> TaskConfig:
@@ -73,7 +73,8 @@ class Variant:
             return Lighting()
         warm, cold = np.array([1.0, 0.8, 0.6]), np.array([0.7, 0.85, 1.0])
         mix = rng.uniform()
-        return Lighting(brightness=float(rng.uniform(0.5, 1.6)), tint=tuple(float(v) for v in (1 - mix) * warm + mix * cold))
+        tint = tuple(float(v) for v in (1 - mix) * warm + mix * cold)
+        return Lighting(brightness=float(rng.uniform(0.5, 1.6)), tint=tint)
 
 
 VARIANTS: dict[str, Variant] = {v.name: v for v in (

@@ -59,7 +59,8 @@ def main() -> None:
         for cam in CAMERAS:
             name = WRIST_CAMERA_MJCF if cam == "wrist" else cam
             env.sim.render(camera_name=name, width=w, height=h)  # allocate buffers
-            fps = timed(lambda: env.sim.render(camera_name=name, width=w, height=h), args.seconds / 2)
+            fps = timed(lambda name=name, w=w, h=h: env.sim.render(camera_name=name, width=w, height=h),
+                        args.seconds / 2)
             print(f"{f'{cam} camera {h}x{w} [frames/s]':<34}{fps:>12.1f}")
     env.close()
 

@@ -43,7 +43,7 @@ def bench(policy: str, variant: str, episodes: int, repeats: int, image_size: in
         rates = [60 * episodes / t for t in times]
         print(f"{envs:<6}{statistics.median(times):>20.1f}{statistics.median(rates):>15.1f}"
               f"{f'{min(rates):.1f}-{max(rates):.1f}':>18}")
-    ratios = [a / b for a, b in zip(seconds[1], seconds[2])]
+    ratios = [a / b for a, b in zip(seconds[1], seconds[2], strict=True)]
     print(f"2 envs / 1 env: {statistics.median(ratios):.2f}x (range {min(ratios):.2f}-{max(ratios):.2f}x)")
     print(f"same per-episode results with 1 and 2 envs: {same}; success {reports[1].success_rate:.0%}")
 

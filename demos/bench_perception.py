@@ -23,7 +23,8 @@ from colorsort.expert.perception import UNKNOWN, ColorSensor
 from colorsort.expert.sensor_views import ViewSampler, wrap_quarter_turn
 
 COLORS = ("red", "green", "blue", "yellow", "purple")
-CASES = [(name, name, "single") for name in CONDITIONS] + [("partial", "normal", "partial"), ("two boxes", "normal", "two_boxes")]
+CASES = ([(name, name, "single") for name in CONDITIONS]
+         + [("partial", "normal", "partial"), ("two boxes", "normal", "two_boxes")])
 
 
 def main() -> None:
@@ -67,7 +68,8 @@ def main() -> None:
         else:
             row += f"{'n/a':>22}{'n/a':>23}"
         print(row + f"{1000 * np.mean(times):>8.2f}", flush=True)
-    print(f"worst accuracy: normal light {worst['normal']:.2f}% (target 100), other conditions {worst['other']:.2f}% (target 99.5)")
+    print(f"worst accuracy: normal light {worst['normal']:.2f}% (target 100), "
+          f"other conditions {worst['other']:.2f}% (target 99.5)")
     env.close()
 
 

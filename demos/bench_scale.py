@@ -60,7 +60,8 @@ def recording(base: CollectConfig, repeats: int, tmp: Path) -> dict[tuple[str, i
 
 def staged_shards(base: CollectConfig, tmp: Path, episodes: int, shard_size: int) -> list[Path]:
     """Finished shards of ``shard_size`` episodes, kept: recorded with collect's own shard task."""
-    from colorsort.data.shards import ShardJob, record as record_shard
+    from colorsort.data.shards import ShardJob
+    from colorsort.data.shards import record as record_shard
     from colorsort.executors.base import chunks
 
     class Ctx:
@@ -128,7 +129,7 @@ def main() -> None:
     n, k = 20_000, 32
     shards = -(-n // k)
     merge_s = coef[0] + coef[1] * shards + coef[2] * n
-    serial = ray_start = statistics.median(s.wall_s for s in runs["ray", 1]) - statistics.median(s.wall_s for s in local1)
+    ray_start = statistics.median(s.wall_s for s in runs["ray", 1]) - statistics.median(s.wall_s for s in local1)
     serial = max(ray_start, 0.0) + merge_s
     t1 = shards * (setup + k * per_episode) + merge_s
     print(f"\nprojection: {n} episodes in shards of {k}: {per_episode:.2f} s per episode, {setup:.2f} s start-up "
@@ -144,7 +145,8 @@ def main() -> None:
         evaluate("expert", "default", args.eval_episodes, image_size=(128, 128), progress=False,
                  executor=ExecutorConfig(executor, workers))
         minutes = (time.perf_counter() - t) / 60
-        print(f"  {executor:<6} {workers} worker{'s' * (workers > 1)}: {args.eval_episodes / minutes:5.1f} episodes/min")
+        rate = args.eval_episodes / minutes
+        print(f"  {executor:<6} {workers} worker{'s' * (workers > 1)}: {rate:5.1f} episodes/min")
 
 
 if __name__ == "__main__":

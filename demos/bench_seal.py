@@ -5,8 +5,9 @@
 For each relative speed v [m/s] the belt (a tracking belt, which never stops) runs at v and the
 cup, held still over the belt, comes down onto a box as the tracking expert does (its heights,
 ``track_heights``: down 4.3 cm in 0.2 s with suction on, 0.05 s on the box, up until the box's
-bottom is 5 cm over the belt in 0.15 s), the box timed to arrive under it as the pad lands. Printed per speed: whether the vacuum sealed, whether the box came up
-with the cup, the box's offset from the cup's axis once lifted [mm] and its tilt [deg].
+bottom is 5 cm over the belt in 0.15 s), the box timed to arrive under it as the pad lands.
+Printed per speed: whether the vacuum sealed, whether the box came up with the cup, the box's
+offset from the cup's axis once lifted [mm] and its tilt [deg].
 The tracking expert matches the belt's velocity, so the relative speed it seals at is its
 matching error (millimetres per second); this is the margin it has.
 """
@@ -21,8 +22,8 @@ import numpy as np
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 from colorsort.cell.env import ColorSort  # noqa: E402
-from colorsort.expert.config import ExpertConfig  # noqa: E402
 from colorsort.expert.calibration import Calibration  # noqa: E402
+from colorsort.expert.config import ExpertConfig  # noqa: E402
 from colorsort.expert.planning import CupIK, Waypoint, site_yaw  # noqa: E402
 from colorsort.expert.tracking import DensePath, smoothstep, track_heights  # noqa: E402
 
@@ -56,7 +57,8 @@ def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
         obs, _, _, info = env.step(np.concatenate([ref + cal.lead * vel, [1.0, -1.0]]))
         sealed = sealed or info["suction_sealed"]
     # came up with the cup: its bottom more than half the lift over the belt
-    lifted = box.status.value == "in_play" and env.box_pos(box)[2] > L.belt_top_z + L.box_size / 2 + cfg.track_lift_gap / 2
+    lifted = (box.status.value == "in_play"
+              and env.box_pos(box)[2] > L.belt_top_z + L.box_size / 2 + cfg.track_lift_gap / 2)
     cup = np.asarray(obs["robot0_eef_pos"])
     offset = 1000 * float(np.hypot(*(env.box_pos(box)[:2] - cup[:2]))) if lifted else float("nan")
     w = env.plant.pool.pose(box)[3]

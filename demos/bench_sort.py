@@ -27,7 +27,8 @@ def run_one(preset: str, robot: str, boxes: int, seed: int) -> tuple[int, dict, 
     from colorsort.benchmark.sorting import SortConfig, run_sort
 
     t0 = time.perf_counter()
-    report = run_sort(SortConfig(preset=preset, robot=robot, boxes=boxes, seed=seed), progress=False, log=lambda _: None)
+    config = SortConfig(preset=preset, robot=robot, boxes=boxes, seed=seed)
+    report = run_sort(config, progress=False, log=lambda _: None)
     return seed, report.to_json(), time.perf_counter() - t0
 
 

@@ -48,7 +48,8 @@ def main() -> None:
     for r in reports:
         lo, hi = r.success_ci95
         cycle = f"{r.mean_cycle_time_s:.2f}" if r.mean_cycle_time_s is not None else "-"
-        print(f"| {r.variant} | {r.policy} | {100 * r.success_rate:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%) | {r.correct} "
+        rate = f"{100 * r.success_rate:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%)"
+        print(f"| {r.variant} | {r.policy} | {rate} | {r.correct} "
               f"| {r.misplaced} | {r.dropped} | {r.distractors_let_through}/{r.distractors} | {r.boxes_per_minute:.1f} "
               f"| {cycle} |")
 

@@ -37,7 +37,8 @@ def run_one(preset: str, robot: str, boxes: int, seed: int) -> tuple[str, int, d
 
     quiet_robosuite_info()
     t0 = time.perf_counter()
-    report = run_sort(SortConfig(preset=preset, robot=robot, boxes=boxes, seed=seed), progress=False, log=lambda _: None)
+    config = SortConfig(preset=preset, robot=robot, boxes=boxes, seed=seed)
+    report = run_sort(config, progress=False, log=lambda _: None)
     return preset, seed, report.to_json(), time.perf_counter() - t0
 
 
@@ -63,8 +64,10 @@ def main() -> None:
             runs[preset].append(report)
     wall = time.perf_counter() - start
 
-    print(f"{args.robot}, seeds 0..{args.seeds - 1}, {args.boxes} boxes each ({wall:.0f} s wall, {args.workers} workers)")
-    print("| preset | belt | correct | misplaced | dropped | rejected | let go | boxes/min (min-max) | belt stood still "
+    print(f"{args.robot}, seeds 0..{args.seeds - 1}, {args.boxes} boxes each "
+          f"({wall:.0f} s wall, {args.workers} workers)")
+    print("| preset | belt | correct | misplaced | dropped | rejected | let go | boxes/min (min-max) "
+          "| belt stood still "
           "| v/vmax |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for preset, reports in runs.items():
@@ -72,8 +75,10 @@ def main() -> None:
         total = {k: sum(r[k] for r in reports) for k in ("correct", "misplaced", "dropped", "rejected", "let_go")}
         rates = [r["boxes_per_minute"] for r in reports]
         stood = np.mean([r["belt_stopped_s"] / r["sim_time_s"] for r in reports])
-        belt = f"{'tracking' if task.tracking else 'stopping'}, {task.belt_speed} m/s, a box every {task.spawn_period} s"
-        print(f"| {preset} | {belt} | {total['correct']} | {total['misplaced']} | {total['dropped']} | {total['rejected']} "
+        kind = "tracking" if task.tracking else "stopping"
+        belt = f"{kind}, {task.belt_speed} m/s, a box every {task.spawn_period} s"
+        print(f"| {preset} | {belt} | {total['correct']} | {total['misplaced']} | {total['dropped']} "
+              f"| {total['rejected']} "
               f"| {total['let_go']} | {np.mean(rates):.1f} ({np.min(rates):.1f}-{np.max(rates):.1f}) "
               f"| {100 * stood:.0f}% of sim time | {max(r['peak_speed_ratio'] for r in reports):.2f} |")
     print()

@@ -167,10 +167,11 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
     (run_dir / "checkpoints" / "last").symlink_to("000002")
     set_inference(run_dir, get_recipe("camera-tracking"))
     for step in ("000001", "000002", "last"):
-        config = json.loads((run_dir / "checkpoints" / step / "pretrained_model" / "config.json").read_text())
-        assert config == {"type": "act", "dim_model": 128, "n_action_steps": 1, "temporal_ensemble_coeff": 0.01}
-        train_config = json.loads((run_dir / "checkpoints" / step / "pretrained_model" / "train_config.json").read_text())
-        assert train_config == {"steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.01}}
+        model = run_dir / "checkpoints" / step / "pretrained_model"
+        assert json.loads((model / "config.json").read_text()) == {
+            "type": "act", "dim_model": 128, "n_action_steps": 1, "temporal_ensemble_coeff": 0.01}
+        assert json.loads((model / "train_config.json").read_text()) == {
+            "steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.01}}
 
 
 @pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])
@@ -247,3 +248,22 @@ def test_a_checkpoint_on_a_variant_it_does_not_fit_gets_a_one_line_error(variant
     assert eval_main(["--policy", str(SHIPPED["act-state"]), "--variant", variant, "--episodes", "1"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and f"cannot run on {variant}" in err and "'default'" in err
+
+
+def test_variant_all_runs_each_shipped_baseline_on_exactly_the_variants_it_fits(capsys):
+    """A stopping-belt policy (23 state inputs) skips the tracking variants (24) and the Panda (25); the tracking
+    policy runs on the three tracking variants only; every skipped variant is named with its reason."""
+    from colorsort.cli.eval import variant_names
+
+    tracking = ["tracking", "tracking-fast", "tracking-jitter"]
+    for name, path in SHIPPED.items():
+        if not path.is_dir():
+            continue
+        fits = variant_names(str(path), "all")
+        skipped = capsys.readouterr().err
+        if "tracking" in name:
+            assert fits == tracking
+        else:
+            assert not set(fits) & {*tracking, "robots-panda"}
+            assert {"seed", "default", "fast", "jitter", "lighting", "distractors"} <= set(fits)
+        assert all(f"skipping {v}:" in skipped for v in ["robots-panda", *(set(tracking) - set(fits))])

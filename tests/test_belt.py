@@ -50,7 +50,7 @@ def test_belt_stops_when_ray_blocked_and_restarts_when_clear(env):
     for _ in range(10):
         env.step(hold_action(env))
     after = [env.box_pos(b)[0] for b in followers]
-    assert followers and all(a < b - 0.05 for a, b in zip(after, before))  # the queue moves on
+    assert followers and all(a < b - 0.05 for a, b in zip(after, before, strict=True))  # the queue moves on
 
 
 def test_box_riding_past_the_end_is_dropped():

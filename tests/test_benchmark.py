@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from colorsort.config import BIN_COLORS, COLORS
 from colorsort.benchmark.evaluate import evaluate
+from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import wilson_interval
 from colorsort.cli.eval import main as eval_main
-from colorsort.benchmark.gym_env import ColorSortGymEnv
+from colorsort.config import BIN_COLORS, COLORS
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))

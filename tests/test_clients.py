@@ -17,8 +17,8 @@ from conftest import make_env
 from test_bins import drop_into_bin, run, the_box
 from test_expert import make_expert_env, run_until
 
-from colorsort.robots import ROBOTS
 from colorsort.benchmark.gym_env import ColorSortGymEnv
+from colorsort.robots import ROBOTS
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
 
 SMALL = dict(cameras=("scene",), image_size=(32, 32))
@@ -188,7 +188,7 @@ def test_shaped_reward_rises_through_the_stages_of_an_expert_episode():
     run_until(env, expert, obs, boxes=1, max_time=15.0,
               on_step=lambda a, o, info: trace.append((env.staged_rewards(), env.reward())))
     assert env.events[0].outcome == "placed"
-    stages, rewards = zip(*trace)
+    stages, rewards = zip(*trace, strict=True)
     first = {name: next(k for k, s in enumerate(stages) if s[name] > (0.1 if name == "reach" else 0))
              for name in ("reach", "seal", "carry", "place")}
     assert first["reach"] < first["seal"] == first["carry"] < first["place"]  # in order; carrying starts sealed

@@ -8,13 +8,13 @@ import pyarrow.parquet as pq
 import pytest
 from conftest import TINY
 
-from colorsort.data import recorder as recorder_module
 from colorsort.cli.args import parse_image_size
 from colorsort.cli.collect import main
+from colorsort.data import recorder as recorder_module
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
-from colorsort.executors.base import chunks
 from colorsort.data.store import MARKER
+from colorsort.executors.base import chunks
 from colorsort.expert.sorter import SortingExpert
 
 

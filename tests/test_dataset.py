@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from conftest import TINY
 
-from colorsort.data.store import MARKER
 from colorsort.config import COLORS
 from colorsort.data.schema import ACTION, ENV_STATE, SIM_STATE, STATE, image_key
+from colorsort.data.store import MARKER
 
 FPS = 20
 

@@ -96,7 +96,8 @@ def test_info_keys_and_success():
     env.reset()
     (box,) = env.boxes_in_play()
     _, _, done, info = env.step(np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]]))
-    for key in ("belt_running", "box_detected", "placed", "misplaced", "dropped", "bins_emptied", "spawned", "is_success"):
+    for key in ("belt_running", "box_detected", "placed", "misplaced", "dropped", "bins_emptied", "spawned",
+                "is_success"):
         assert key in info
     assert not done and not info["is_success"]
     x, y = env.layout.bin_center(["red", "green", "blue"].index(box.color))

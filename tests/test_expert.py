@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from conftest import make_env
 
-from colorsort.expert.sorter import Phase, SortingExpert
 from colorsort.cli.sort import main as sort_main
+from colorsort.expert.sorter import Phase, SortingExpert
 
 
 def make_expert_env(robot="IRB140", **kwargs):

@@ -139,10 +139,10 @@ def test_an_unknown_task_names_the_valid_ones():
 def tiny_act(dataset_root, out_dir):
     """A small randomly initialised ACT policy built from a recorded dataset's features, saved as a checkpoint."""
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
-    from lerobot.utils.feature_utils import dataset_to_policy_features
     from lerobot.policies.act.configuration_act import ACTConfig
     from lerobot.policies.act.modeling_act import ACTPolicy
     from lerobot.policies.factory import make_pre_post_processors
+    from lerobot.utils.feature_utils import dataset_to_policy_features
 
     meta = LeRobotDatasetMetadata("local/colorsort", root=dataset_root)
     features = dataset_to_policy_features(meta.features)

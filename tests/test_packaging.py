@@ -25,7 +25,8 @@ def wheel(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("wheel")
     # Build from a copy: setuptools writes build/ and *.egg-info next to the sources.
     src = tmp_path_factory.mktemp("src") / "colorsort"
-    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(".venv", ".git", "build", "*.egg-info", "outputs", "datasets"))
+    skip = shutil.ignore_patterns(".venv", ".git", "build", "*.egg-info", "outputs", "datasets")
+    shutil.copytree(ROOT, src, ignore=skip)
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(out), str(src)],
         check=True, env={**os.environ, "PIP_NO_INDEX": "1"},

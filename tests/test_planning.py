@@ -4,9 +4,18 @@ import numpy as np
 import pytest
 from conftest import make_env
 
+from colorsort.expert.planning import (
+    ANGLE_TOLERANCE,
+    POSITION_TOLERANCE,
+    CupIK,
+    MotionConfig,
+    UnreachableWaypoint,
+    Waypoint,
+    cup_down_rotation,
+    plan_motion,
+    site_yaw,
+)
 from colorsort.robots import ROBOTS
-from colorsort.expert.planning import (ANGLE_TOLERANCE, POSITION_TOLERANCE, CupIK, MotionConfig, UnreachableWaypoint,
-                                Waypoint, cup_down_rotation, plan_motion, site_yaw)
 
 
 def make_ik(robot: str) -> CupIK:

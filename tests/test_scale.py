@@ -3,8 +3,8 @@ whatever the shard size; a worker killed outright loses at most its shard; --res
 crash completes the dataset with every episode once. One Ray cluster (2 CPUs) for the module."""
 
 import json
-import shlex
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -180,7 +180,8 @@ def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_command(tmp_path)
     """The batch script on a one-node stand-in for SLURM: srun runs its command here, scontrol names this host."""
     shims = tmp_path / "bin"
     shims.mkdir()
-    (shims / "srun").write_text('#!/bin/bash\nwhile [[ $# -gt 0 && $1 == -* ]]; do [[ $1 == -w ]] && shift; shift; done\n'
+    (shims / "srun").write_text('#!/bin/bash\n'
+                                'while [[ $# -gt 0 && $1 == -* ]]; do [[ $1 == -w ]] && shift; shift; done\n'
                                 'exec "$@"\n')
     (shims / "scontrol").write_text("#!/bin/bash\nhostname\n")
     for shim in shims.iterdir():

@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 from conftest import make_env
 
-from colorsort.expert.sorter import SortingExpert
-from colorsort.expert.sorter import Cycle
+from colorsort.expert.sorter import Cycle, SortingExpert
 from colorsort.expert.tracking import Sighting, TrackingExpert
 
 

@@ -16,8 +16,15 @@ from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.cell.cameras import parse_cameras
-from colorsort.executors.base import (DEFAULT_SHARD_SIZE, ExecutorConfig, Task, TaskContext, chunks, forwarded_env,
-                                      make_executor)
+from colorsort.executors.base import (
+    DEFAULT_SHARD_SIZE,
+    ExecutorConfig,
+    Task,
+    TaskContext,
+    chunks,
+    forwarded_env,
+    make_executor,
+)
 from colorsort.variants import Variant, get_variant
 
 
@@ -151,8 +158,8 @@ def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int,
             jobs.append(EvalJob(settings, tuple(block)))
             owner.append(k)
     results, _ = run_episodes(jobs, executor, progress, desc=f"{policy_spec} on {', '.join(variant_names)}")
-    per = [[r for job, rs in zip(owner, results) if job == k for r in rs] for k in range(len(variants))]
-    return [aggregate(str(policy_spec), v.name, rs) for v, rs in zip(variants, per)]
+    per = [[r for job, rs in zip(owner, results, strict=True) if job == k for r in rs] for k in range(len(variants))]
+    return [aggregate(str(policy_spec), v.name, rs) for v, rs in zip(variants, per, strict=True)]
 
 
 def evaluate(policy_spec: str, variant_name: str, episodes: int, seed: int | None = None,

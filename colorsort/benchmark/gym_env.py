@@ -5,7 +5,8 @@ per variant (``colorsort.variants``)::
 
     import gymnasium as gym, colorsort
     env = gym.make("colorsort/ColorSort-Jitter-v0", cameras=("scene", "wrist"), image_size=(128, 128))
-    obs, info = env.reset(seed=0)   # obs["pixels"]["scene"]: (128, 128, 3) uint8; obs["agent_pos"]: (23,), (24,) tracking
+    obs, info = env.reset(seed=0)   # obs["pixels"]["scene"]: (128, 128, 3) uint8
+                                    # obs["agent_pos"]: (23,); (24,) on a tracking belt
 
 Observations: ``pixels`` (a dict of camera images, (H, W, 3) uint8), ``agent_pos``
 (``observation.state`` of the datasets) and ``environment_state`` (the next box: colour one-hot,

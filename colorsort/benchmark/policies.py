@@ -73,7 +73,8 @@ class LeRobotPolicy:
         self.policy = get_policy_class(config.type).from_pretrained(path, config=config)
         self.policy.eval()
         self.preprocessor, self.postprocessor = make_pre_post_processors(
-            policy_cfg=config, pretrained_path=str(path), preprocessor_overrides={"device_processor": {"device": device}})
+            policy_cfg=config, pretrained_path=str(path),
+            preprocessor_overrides={"device_processor": {"device": device}})
 
     def reset(self, env: ColorSortGymEnv, seed: int) -> None:
         import torch
@@ -94,7 +95,7 @@ class LeRobotPolicy:
 
 
 def check_policy_spec(spec: str) -> None:
-    """ValueError unless ``spec`` is ``"expert"``, ``"random"`` or a LeRobot checkpoint folder (cheap: loads nothing)."""
+    """ValueError unless ``spec`` is ``"expert"``, ``"random"`` or a LeRobot checkpoint folder (loads nothing)."""
     if spec in ("expert", "random"):
         return
     if not Path(spec).exists():
@@ -128,8 +129,8 @@ def misfit(spec: str, variant: Variant) -> str | None:
     robot = get_robot(variant.robot)
     wanted = {"observation.state": state_size(robot.n_joints, variant.task_config.tracking),
               "action": len(robot.action_bounds()[0])}
-    given = {k: f["shape"][0] for k, f in {**config.get("input_features", {}), **config.get("output_features", {})}.items()
-             if k in wanted}
+    features = {**config.get("input_features", {}), **config.get("output_features", {})}
+    given = {k: f["shape"][0] for k, f in features.items() if k in wanted}
     bad = {k: (given[k], n) for k, n in wanted.items() if k in given and given[k] != n}
     return f"sizes (checkpoint, {variant.name}) differ: {bad}" if bad else None
 

@@ -41,7 +41,8 @@ This class is robosuite glue; the cell itself is ``plant.py`` (pool, belt, spawn
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -123,7 +124,8 @@ class ColorSort(ManipulationEnv):
 
         physics_hz = 1.0 / macros.SIMULATION_TIMESTEP
         if servo_freq <= 0 or abs(physics_hz / servo_freq - round(physics_hz / servo_freq)) > 1e-9:
-            raise ValueError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, e.g. 100, 250, 500")
+            raise ValueError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, "
+                             "e.g. 100, 250, 500")
         self._servo_period = int(round(physics_hz / servo_freq))  # physics steps per torque update
         self._substep = 0
         self._obs_dt = 0.0

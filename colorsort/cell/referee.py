@@ -15,9 +15,9 @@ success (``boxes_to_sort`` placed, none misplaced or dropped).
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Callable
 
 import numpy as np
 

@@ -45,7 +45,7 @@ def is_gl_failure(error: BaseException) -> bool:
     tb = error.__traceback__
     while tb is not None:
         filename = tb.tb_frame.f_code.co_filename.replace("\\", "/")
-        if "/OpenGL/" in filename or "/mujoco/egl/" in filename or "/mujoco/osmesa/" in filename or "_context" in filename:
+        if any(part in filename for part in ("/OpenGL/", "/mujoco/egl/", "/mujoco/osmesa/", "_context")):
             return True
         tb = tb.tb_next
     return False

@@ -162,7 +162,7 @@ def restore(env: ColorSort, vector: np.ndarray) -> None:
     m, d = env.mj_model, env.mj_data
     mujoco.mj_setState(m, d, s.mujoco, MJ_STATE_SPEC)
     colors, statuses = list(COLORS), list(BoxStatus)
-    for box, (color, status, bin_index, serial) in zip(env.boxes, s.boxes):
+    for box, (color, status, bin_index, serial) in zip(env.boxes, s.boxes, strict=True):
         box.status, box.serial = statuses[status], int(serial)
         box.bin = BIN_COLORS[bin_index] if bin_index >= 0 else None
         if color >= 0:  # a parked box's colour is whatever it last had: out of sight, not part of the state

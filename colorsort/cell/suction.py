@@ -92,6 +92,7 @@ def add_welds(task_model, cup_body: str, box_names: list[str]) -> list[str]:
     """Add one inactive weld equality per box, between ``cup_body`` and the box, to a robosuite task
     model (``ManipulationTask``); returns their names, in ``box_names``' order."""
     names = [f"suction_{name}" for name in box_names]
-    for weld, box in zip(names, box_names):
-        task_model.equality.append(new_element("weld", weld, body1=cup_body, body2=box, active="false", solref="0.01 1"))
+    for weld, box in zip(names, box_names, strict=True):
+        task_model.equality.append(
+            new_element("weld", weld, body1=cup_body, body2=box, active="false", solref="0.01 1"))
     return names

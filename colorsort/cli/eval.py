@@ -13,7 +13,8 @@ processes, or a Ray cluster: a local one, or the one at ``--address``) and ``--s
 (episodes per job; each job builds one env and one policy). ``--variant all`` runs every
 variant the policy fits (a checkpoint fits those with its robot's state and action sizes) and
 prints one line per variant.
-Metrics: success rate (every box of the episode where it belongs, none misplaced or dropped) with a 95% Wilson interval; boxes placed correctly, misplaced, dropped;
+Metrics: success rate (every box of the episode where it belongs, none misplaced or dropped) with a
+95% Wilson interval; boxes placed correctly, misplaced, dropped;
 distractors (boxes with no bin) let through; boxes per minute (boxes handled right, placed in
 their bin or let through, per minute of sim time); mean cycle time (sim time between consecutive
 boxes handled right).

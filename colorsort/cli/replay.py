@@ -33,7 +33,8 @@ def main(argv: list[str] | None = None) -> int:
     quiet_robosuite_info()
     # datasets' note when HF_DATASETS_DISABLE_PROGRESS_BARS is set, and torchvision's deprecation notice
     warnings.filterwarnings("ignore", message="Cannot enable progress bars")
-    warnings.filterwarnings("ignore", message="The video decoding and encoding capabilities of torchvision are deprecated")
+    warnings.filterwarnings("ignore",
+                            message="The video decoding and encoding capabilities of torchvision are deprecated")
     parser = argparse.ArgumentParser(prog="colorsort-replay", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("dataset", help="dataset directory (colorsort-collect's --out)")

@@ -13,9 +13,9 @@ import json
 import os
 import shutil
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from tqdm import tqdm
 
@@ -138,7 +138,8 @@ def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], N
     sources = ([root] if marker else []) + [Path(s.root) for s in reports if s.kept]
     if any(s.kept for s in reports):
         merged = staging / "merged"
-        (merge if config.executor == "local" and config.workers == 1 else merge_in_child)(sources, merged, config.repo_id)
+        merger = merge if config.executor == "local" and config.workers == 1 else merge_in_child
+        merger(sources, merged, config.repo_id)
         kept = (marker["episodes"] if marker else []) + [i for s in reports for i in s.kept]
         layout = next((s.sim_state for s in reports if s.sim_state), None)
         record_ = {"settings": config.settings(), "episodes": kept, "tried": sorted(tried), "failed": failed,

@@ -35,7 +35,8 @@ class CollectConfig:
     retries: int = 2  # re-runs of a shard whose worker process died
     address: str | None = None  # ray only: the cluster to join ("auto"); None starts one on this machine
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
-    late_pass: int = 0  # [control steps] hold each belt-pass back 0..late_pass steps; stored actions stay the expert's (late_pass.py)
+    # [control steps] hold each belt pass back 0..late_pass steps; stored actions stay the expert's (late_pass.py)
+    late_pass: int = 0
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
 
@@ -69,8 +70,8 @@ class CollectConfig:
 
     def settings(self) -> dict:
         """The settings every episode of one dataset must share (checked on --resume)."""
-        keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps", "vcodec",
-                "late_pass")
+        keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps",
+                "vcodec", "late_pass")
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
 
     @property

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import time
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -92,8 +92,9 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     out.sim_state = env.sim_state_layout.describe()
     dataset = LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
-        robot_type=config.robot, use_videos=True, video_backend="pyav", rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec),
-        streaming_encoding=True, encoder_queue_maxsize=10_000, encoder_threads=1 if config.workers > 1 or config.executor != "local" else None,
+        robot_type=config.robot, use_videos=True, video_backend="pyav",
+        rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec), streaming_encoding=True, encoder_queue_maxsize=10_000,
+        encoder_threads=1 if config.workers > 1 or config.executor != "local" else None,
     )
     sec["setup"] += time.perf_counter() - t0
     limit = episode_time_limit(config)

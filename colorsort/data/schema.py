@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from colorsort.config import BIN_COLORS, COLORS
 from colorsort.cell.env import ColorSort
+from colorsort.config import BIN_COLORS, COLORS
 
 STATE = "observation.state"
 ENV_STATE = "observation.environment_state"
@@ -116,7 +116,8 @@ def box_state(env: ColorSort) -> np.ndarray:
     return env.plant.next_box_state()
 
 
-def frame(env: ColorSort, obs: dict[str, Any], action: np.ndarray, cameras: tuple[str, ...], task: str) -> dict[str, Any]:
+def frame(env: ColorSort, obs: dict[str, Any], action: np.ndarray, cameras: tuple[str, ...],
+          task: str) -> dict[str, Any]:
     """One LeRobot frame: the observation ``obs`` (just returned by ``env``) and the action taken from it."""
     out: dict[str, Any] = {image_key(c): obs[f"{c}_image"] for c in cameras}
     out[STATE] = robot_state(env, obs)

@@ -10,8 +10,9 @@ exception raised by the task is its result, not retried (it would raise again).
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, Protocol
+from typing import Any, Protocol
 
 from colorsort.config import check_range
 
@@ -42,7 +43,7 @@ class ExecutorConfig:
 @dataclass(frozen=True)
 class Task:
     key: str  # names the task in errors, e.g. "shard-000032"
-    fn: Callable[[Any, "TaskContext"], Any]  # a module-level function
+    fn: Callable[[Any, TaskContext], Any]  # a module-level function
     arg: Any
 
 

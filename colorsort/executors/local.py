@@ -14,9 +14,10 @@ import signal
 import threading
 import traceback
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from multiprocessing.connection import wait
-from typing import Any, Callable
+from typing import Any
 
 from colorsort.executors.base import ExecutorConfig, Task, TaskResult
 from colorsort.logs import quiet_robosuite_info

@@ -13,8 +13,9 @@ from __future__ import annotations
 import logging
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 from colorsort.executors.base import ExecutorConfig, Task, TaskResult
 
@@ -51,8 +52,8 @@ class RayExecutor:
         started_here = not ray.is_initialized()
         if started_here:
             # "local": a new cluster here, never one that an earlier `ray start` on this machine left behind
-            ray.init(address=self.config.address or "local", runtime_env={"env_vars": self.env}, include_dashboard=False,
-                     logging_level=logging.WARNING)
+            ray.init(address=self.config.address or "local", runtime_env={"env_vars": self.env},
+                     include_dashboard=False, logging_level=logging.WARNING)
         queue = Queue()
         remote = ray.remote(_entry).options(num_cpus=1, max_retries=self.config.retries, retry_exceptions=False)
         results = [TaskResult(t.key) for t in tasks]

@@ -7,8 +7,9 @@ once from a ``ColorSort`` env through public handles; the expert never touches t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -49,9 +50,9 @@ class Calibration:
         robot = env.robots[0]
         controller = robot.part_controllers["right"]
         camera = CameraModel.from_sim(env.mj_model, env.mj_data, "sensor", *photo_size)
+        lead = np.asarray(controller.kd, float) / np.asarray(controller.kp, float)
         return cls(camera, robot.robot_model.get_model(mode="mujoco"), np.asarray(env.robot_spec.home, float),
-                   np.array(env.robot_spec.joint_speeds), np.asarray(controller.kd, float) / np.asarray(controller.kp, float),
-                   env.layout, env.control_timestep)
+                   np.array(env.robot_spec.joint_speeds), lead, env.layout, env.control_timestep)
 
 
 def sensor_source(env: ColorSort, size: int) -> tuple[tuple[int, int], Callable[[dict], np.ndarray]]:

@@ -54,7 +54,7 @@ class CameraModel:
         return self.height / 2 / np.tan(np.deg2rad(self.fovy) / 2)
 
     @classmethod
-    def from_sim(cls, model, data, name: str, width: int, height: int) -> "CameraModel":
+    def from_sim(cls, model, data, name: str, width: int, height: int) -> CameraModel:
         """Calibration of camera ``name`` from a MuJoCo model and data (after ``mj_forward``)."""
         cid = model.camera(name).id
         return cls(
@@ -66,7 +66,7 @@ class CameraModel:
         )
 
     def pixel_to_plane(self, uv: np.ndarray, z: float) -> np.ndarray:
-        """World points [m], (n, 3), where pixel rays ``uv`` (n, 2) [px, (column, row)] meet the plane at height ``z``."""
+        """World points [m], (n, 3), where pixel rays ``uv`` (n, 2) [px, (column, row)] meet the plane at ``z``."""
         uv = np.atleast_2d(np.asarray(uv, float))
         f = self.focal
         x = (uv[:, 0] - self.width / 2) / f
@@ -182,7 +182,8 @@ class ColorSensor:
         L, cam = self.layout, self.camera
         half = L.belt_width / 2
         xs = cam.pixel_to_plane(np.array([[0.0, cam.height / 2], [cam.width, cam.height / 2]]), self.top_z)[:, 0]
-        corners = np.array([[x, L.belt_y + s * half, self.top_z] for x in (xs.min() - 1, xs.max() + 1) for s in (-1, 1)])
+        corners = np.array([[x, L.belt_y + s * half, self.top_z]
+                            for x in (xs.min() - 1, xs.max() + 1) for s in (-1, 1)])
         px = cam.world_to_pixel(corners[[0, 1, 3, 2]])
         roi = np.zeros((cam.height, cam.width), np.uint8)
         cv2.fillConvexPoly(roi, np.round(px).astype(np.int32), 1)

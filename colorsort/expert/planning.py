@@ -60,7 +60,7 @@ class UnreachableWaypoint(ValueError):
 
 
 def cup_down_rotation(yaw: float) -> np.ndarray:
-    """Rotation (3, 3) of the grip site with its z axis (the cup's approach) pointing down, its x axis at ``yaw`` [rad]."""
+    """Rotation (3, 3) of the grip site, its z axis (the cup's approach) pointing down, its x axis at ``yaw`` [rad]."""
     c, s = np.cos(yaw), np.sin(yaw)
     return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
 

@@ -73,7 +73,8 @@ class ViewSampler:
         y = L.belt_y + rng.uniform(-self.lateral_jitter, self.lateral_jitter)
         reach = half * (abs(np.cos(yaw)) + abs(np.sin(yaw)))  # centre to leading corner along x
         top_z = L.belt_top_z + L.box_size
-        x_edge = self.camera.pixel_to_plane(np.array([[self.width, self.height / 2]]), top_z)[0, 0]  # upstream edge of view
+        # the upstream edge of the view
+        x_edge = self.camera.pixel_to_plane(np.array([[self.width, self.height / 2]]), top_z)[0, 0]
         if layout == "partial":
             x = x_edge + rng.uniform(-0.3, 0.3) * L.box_size  # 20% to 80% of the box in view
         else:

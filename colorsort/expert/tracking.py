@@ -16,8 +16,8 @@ Phases: ``MOVE_TO_WAIT`` (over the upstream end of the reach window), ``WAIT_FOR
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -174,7 +174,8 @@ class TrackingExpert(SortingExpert):
         cycle = Cycle(t.color if t is not None else "none", self.time, target_bin=t.color if pickable else None)
         self.cycles.append(cycle)
         if pickable:
-            self.queue.append(Sighting(cycle, float(t.center[0]), float(t.center[1]), self.cup_yaw + t.yaw, self.travel))
+            x, y = float(t.center[0]), float(t.center[1])
+            self.queue.append(Sighting(cycle, x, y, self.cup_yaw + t.yaw, self.travel))
         else:
             cycle.done_at = self.time  # let through: nothing to do
 

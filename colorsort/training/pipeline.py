@@ -70,8 +70,9 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             scored = []
             for variant in recipe.eval_variants if largest else (recipe.main_variant,):
                 name = f"{run_dir.name}-{recipe.act.execution}-{variant}"
-                report = stages.evaluate(recipe, last, variant, recipe.episodes_on(variant),
-                                         out / "eval" / f"{name}.json", settings.envs, out / "logs" / f"eval-{name}.log")
+                report_path, log = out / "eval" / f"{name}.json", out / "logs" / f"eval-{name}.log"
+                episodes = recipe.episodes_on(variant)
+                report = stages.evaluate(recipe, last, variant, episodes, report_path, settings.envs, log)
                 scored.append({"demos_tried": n, "demos": kept, "frames": frames, "seed": seed, "steps": steps,
                                "passes": round(steps * recipe.batch_size / frames, 1),
                                "train_minutes": timing["wall_s"] / 60, **report})
@@ -112,7 +113,8 @@ def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing:
             report = final
         else:
             name = f"{run_dir.name}-{recipe.act.execution}-{step}"
-            report = stages.evaluate(recipe, model, recipe.main_variant, episodes, settings.out / "curve" / f"{name}.json",
-                                     settings.envs, settings.out / "logs" / f"curve-{name}.log")
+            report = stages.evaluate(recipe, model, recipe.main_variant, episodes,
+                                     settings.out / "curve" / f"{name}.json", settings.envs,
+                                     settings.out / "logs" / f"curve-{name}.log")
         points.append({"step": step, "minutes": round(minutes, 1), **first_episodes(report, episodes)})
     return points

@@ -170,7 +170,7 @@ class Recipe:
         counts = [int(x) for x in exact]
         for k in sorted(range(len(exact)), key=lambda k: counts[k] - exact[k])[: n - sum(counts)]:
             counts[k] += 1
-        return {v: c for v, c in zip(self.train_variants, counts)}
+        return {v: c for v, c in zip(self.train_variants, counts, strict=True)}
 
     def updates(self, n: int, frames: int) -> int:
         """Training updates for the set of ``n`` demos holding ``frames`` frames."""
@@ -189,7 +189,8 @@ class Recipe:
 
 RECIPES: dict[str, Recipe] = {r.name: r for r in (
     Recipe("state"),
-    Recipe("state-tracking", act=TRACKING_ACT, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,), boxes_per_episode=5,
+    Recipe("state-tracking", act=TRACKING_ACT, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,),
+           boxes_per_episode=5,
            steps=3000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
     # every variant in the mix, yet few enough demos for ~8 passes over them in the hour: 115 demos
     # at 3000 updates (2.8 passes) scored 52% on default, 40 default-only demos at 3000 (7.7) 100%
@@ -197,8 +198,8 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
            train_mix=(("default", 6), ("lighting", 4), ("jitter", 6), ("distractors", 5), ("fast", 4)),
            demos=(50,), steps=3600, save_every=1200),
     Recipe("camera-tracking", act=TRACKING_ACT, cameras=("sensor", "wrist"), image_size=64, batch_size=32,
-           train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(48,), boxes_per_episode=5, steps=3600,
-           save_every=1200, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
+           train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(48,), boxes_per_episode=5, steps=4500,
+           save_every=1500, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
     Recipe("camera-large", act=LARGE_ACT, cameras=("sensor", "wrist"), image_size=128, batch_size=32,
            train_mix=(("default", 4), ("lighting", 4), ("jitter", 6), ("distractors", 5), ("fast", 4)),
            demos=(115,), steps=20000, save_every=5000, device="cuda"),

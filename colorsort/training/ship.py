@@ -65,6 +65,7 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
                  f"({', '.join(map(str, recipe.seeds))}; this policy is seed {recipe.seeds[0]}'s):\n\n"
                  f"{summary_table(every_seed, recipe.label)}\n")
     cameras = ",".join(recipe.cameras) or "none"
+    vae = "a" if act.use_vae else "no"
     execution = (f"predicted every step and averaged over the chunks (temporal ensembling, coefficient "
                  f"{act.temporal_ensemble_coeff})" if act.temporal_ensemble_coeff is not None
                  else f"of which {act.n_action_steps} are executed")
@@ -72,7 +73,7 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
 
 LeRobot ACT ({parameters(dest) / 1e6:.2f} M parameters,{backbone} {act.dim_model}-dim, {act.n_encoder_layers} encoder
-and {act.n_decoder_layers} decoder layers, chunks of {act.chunk_size} actions {execution}, {"a" if act.use_vae else "no"} VAE,
+and {act.n_decoder_layers} decoder layers, chunks of {act.chunk_size} actions {execution}, {vae} VAE,
 learning rate {act.optimizer_lr}) on {inputs}. {size_mb:.1f} MB.
 
 Made by `{command}` (recipe `{recipe.name}`) on commit {commit()}, started {results['started']}, on

@@ -38,7 +38,8 @@ def render(scores: dict, kind: str) -> str:
         return summary_table(scores["rows"], label(scores))
     if kind == "curve":
         if not scores.get("curve"):
-            raise ValueError("this baseline's scores.json has no learning curve (it saved no checkpoints along the way)")
+            raise ValueError("this baseline's scores.json has no learning curve "
+                             "(it saved no checkpoints along the way)")
         return curve_table(scores["curve"])
     raise ValueError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
 

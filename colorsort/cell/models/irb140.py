@@ -40,7 +40,7 @@ def dh_forward_kinematics(q: np.ndarray) -> np.ndarray:
         4x4 homogeneous transform of the flange (z along the flange normal).
     """
     T = np.eye(4)
-    for (d, a, alpha, offset), qi in zip(DH_TABLE, q):
+    for (d, a, alpha, offset), qi in zip(DH_TABLE, q, strict=False):
         theta = qi + offset
         ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
         T = T @ np.array(
@@ -89,7 +89,8 @@ class IRB140(ManipulatorModel):
 
     @property
     def base_xpos_offset(self) -> dict:
-        return {"bins": (-0.5, -0.1, 0), "empty": (-0.6, 0, 0), "table": lambda table_length: (-0.16 - table_length / 2, 0, 0)}
+        return {"bins": (-0.5, -0.1, 0), "empty": (-0.6, 0, 0),
+                "table": lambda table_length: (-0.16 - table_length / 2, 0, 0)}
 
     @property
     def top_offset(self) -> np.ndarray:
