@@ -267,3 +267,23 @@ def test_variant_all_runs_each_shipped_baseline_on_exactly_the_variants_it_fits(
             assert not set(fits) & {*tracking, "robots-panda"}
             assert {"seed", "default", "fast", "jitter", "lighting", "distractors"} <= set(fits)
         assert all(f"skipping {v}:" in skipped for v in ["robots-panda", *(set(tracking) - set(fits))])
+
+
+def test_bench_execution_scores_one_checkpoint_under_each_execution(tmp_path):
+    """demos/bench_execution.py's copy of a checkpoint executes as named: LeRobot loads it with that many open-loop
+    steps or with its temporal ensembler; the weights are the shipped ones; a bad name is refused."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_execution", REPO / "demos" / "bench_execution.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    from colorsort.benchmark.policies import LeRobotPolicy
+
+    chunked = LeRobotPolicy(bench.with_execution(SHIPPED["act-state"], "chunk5", tmp_path)).policy
+    ensembled = LeRobotPolicy(bench.with_execution(SHIPPED["act-state"], "ens0.01", tmp_path)).policy
+    assert (chunked.config.n_action_steps, chunked.config.temporal_ensemble_coeff) == (5, None)
+    assert ensembled.config.n_action_steps == 1 and ensembled.temporal_ensembler.chunk_size == 20
+    assert (tmp_path / "chunk5" / "model.safetensors").read_bytes() == (
+        SHIPPED["act-state"] / "model.safetensors").read_bytes()
+    with pytest.raises(ValueError, match="chunkN"):
+        bench.inference_settings("open10")

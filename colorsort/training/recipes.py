@@ -66,8 +66,8 @@ class ActSettings:
 SMALL_ACT = ActSettings()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
 # On the moving belt every step's action is the average of every chunk's prediction for it (ACT's
 # temporal ensembling, weights exp(-0.01 * age)): executing 10 of each chunk open-loop, the camera
-# policy met no box (0 of 50 on tracking: its cup stopped ~1 cm above the box); ensembled, 33 of 50
-# episodes sorted every box. On the stopping belt it did not help the state policy (fast: stalls).
+# policy sealed on no box (0 of 50 on tracking); ensembled, 33 of 50 episodes sorted every box. On the
+# stopping belt it made the state policy stall on fast (demos/bench_execution.py: 30% against 70%).
 TRACKING_ACT = replace(SMALL_ACT, n_action_steps=1, temporal_ensemble_coeff=0.01)
 LARGE_ACT = ActSettings(dim_model=512, dim_feedforward=3200, n_heads=8, n_encoder_layers=4)  # LeRobot's own size
 
@@ -190,8 +190,7 @@ class Recipe:
 RECIPES: dict[str, Recipe] = {r.name: r for r in (
     Recipe("state"),
     Recipe("state-tracking", act=TRACKING_ACT, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,),
-           boxes_per_episode=5,
-           steps=3000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
+           boxes_per_episode=5, steps=3000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
     # every variant in the mix, yet few enough demos for ~8 passes over them in the hour: 115 demos
     # at 3000 updates (2.8 passes) scored 52% on default, 40 default-only demos at 3000 (7.7) 100%
     Recipe("camera", cameras=("sensor", "wrist"), image_size=64, batch_size=32,
