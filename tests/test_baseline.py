@@ -26,6 +26,7 @@ def baseline(*args: str) -> list[str]:
     return [str(BIN / "colorsort-baseline"), *args]
 
 
+@pytest.mark.slow
 def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     """Two demo counts from two variants (merged with LeRobot's aggregate_datasets), each trained with two seeds for
     2 steps with a checkpoint after each, one evaluation episode per variant, the learning curve of the first seed,
@@ -74,6 +75,7 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
 
 
+@pytest.mark.slow
 def test_the_camera_recipe_runs_in_small(tmp_path):
     """The camera recipe, tiny: the policy takes the images and the arm's state, never the simulator's box state,
     and colorsort-eval renders exactly the cameras it was trained on and refuses others."""
@@ -174,6 +176,7 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
             "steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.01}}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])
 def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
     """README's command for a shipped policy on its main variant's first seed: cameras come from the checkpoint."""
@@ -189,6 +192,7 @@ def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
     assert result["correct"] >= 1  # it picks and places: not an untrained policy
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])
 def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
     """README's lerobot-eval command for a shipped policy, one episode."""
@@ -207,10 +211,11 @@ def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
     assert overall["n_episodes"] == 1 and 0 <= overall["pc_success"] <= 100
 
 
-def test_readmes_recipe_list_runs_verbatim():
-    """README's `colorsort-baseline --list`, as written: one line per recipe."""
-    readme = (REPO / "README.md").read_text()
-    assert "colorsort-baseline --list\n" in readme
+@pytest.mark.slow
+def test_documented_recipe_list_runs_verbatim():
+    """docs/baselines.md's `colorsort-baseline --list`, as written: one line per recipe."""
+    page = (REPO / "docs" / "baselines.md").read_text()
+    assert "colorsort-baseline --list\n" in page
     result = run(baseline("--list"), REPO, timeout=120)
     assert result.returncode == 0, result.stderr
     assert [line.split()[0] for line in result.stdout.splitlines()] == list(RECIPES)
@@ -250,6 +255,18 @@ def test_a_checkpoint_on_a_variant_it_does_not_fit_gets_a_one_line_error(variant
     assert len(err.splitlines()) == 1 and f"cannot run on {variant}" in err and "'default'" in err
 
 
+def test_a_recipe_scored_on_a_variant_its_policy_cannot_run_on_gets_a_one_line_error(capsys, tmp_path):
+    """The pipeline refuses before collecting anything: a stopping-belt policy cannot run on a tracking belt."""
+    from colorsort.cli.baseline import main as baseline_main
+
+    out = tmp_path / "never"
+    assert baseline_main(["--recipe", "state", "--eval-variants", "default,tracking", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "['tracking'] do not fit" in err and "'distractors'" in err
+    assert not out.exists()
+
+
+@pytest.mark.slow
 def test_variant_all_runs_each_shipped_baseline_on_exactly_the_variants_it_fits(capsys):
     """A stopping-belt policy (23 state inputs) skips the tracking variants (24) and the Panda (25); the tracking
     policy runs on the three tracking variants only; every skipped variant is named with its reason."""
@@ -269,6 +286,7 @@ def test_variant_all_runs_each_shipped_baseline_on_exactly_the_variants_it_fits(
         assert all(f"skipping {v}:" in skipped for v in ["robots-panda", *(set(tracking) - set(fits))])
 
 
+@pytest.mark.slow
 def test_bench_execution_scores_one_checkpoint_under_each_execution(tmp_path):
     """demos/bench_execution.py's copy of a checkpoint executes as named: LeRobot loads it with that many open-loop
     steps or with its temporal ensembler; the weights are the shipped ones; a bad name is refused."""

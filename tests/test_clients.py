@@ -49,6 +49,7 @@ VECTOR_SCRIPT = """
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode,context", [("sync", "default"), ("async", "default"), ("async", "fork"),
                                           ("async", "forkserver"), ("async", "spawn")])
 def test_make_vec_steps_and_resets_in_every_mode_and_context(mode, context):
@@ -259,6 +260,7 @@ def test_suite_make_takes_robosuites_reward_arguments():
 
 
 # ---------------------------------------------------------------------- console output
+@pytest.mark.slow
 def test_console_scripts_print_no_robosuite_notices():
     """robosuite's start-up warnings and INFO lines stay out of the commands' output, workers' included."""
     from pathlib import Path

@@ -119,6 +119,7 @@ def test_failed_episodes_are_tried_counted_and_not_kept(tmp_path, monkeypatch):
     assert not (tmp_path / "ds").exists()
 
 
+@pytest.mark.slow
 def test_cli_records_several_boxes_per_episode_and_prints_the_summary(tmp_path, capsys):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -133,6 +134,7 @@ def test_cli_records_several_boxes_per_episode_and_prints_the_summary(tmp_path, 
     assert tuple(ds[0]["observation.images.sensor"].shape) == (3, 32, 32)
 
 
+@pytest.mark.slow
 def test_state_only_dataset_loads_in_lerobot_and_trains(tmp_path):
     """--cameras none: no video features (the expert still takes its own sensor photo), and lerobot-train runs on it."""
     import os

@@ -1,9 +1,9 @@
-"""LeRobot as its users run it: README's lerobot-train and lerobot-eval commands, verbatim, on ColorSort.
+"""LeRobot as its users run it: the docs' lerobot-train and lerobot-eval commands, verbatim, on ColorSort.
 
-The commands are read from README.md, so a test that passes means the documented command works.
-Only what README says may change is changed: the training length and batch (``--steps``,
-``--batch_size``), the evaluation's episode count and batch size (and ``use_async_envs`` for the
-synchronous runs). Everything else is LeRobot's defaults.
+The commands are read from docs/benchmark.md and docs/data.md, the pages that show them, so a test
+that passes means the documented command works. Only what the docs say may change is changed: the
+training length and batch (``--steps``, ``--batch_size``), the evaluation's episode count and batch
+size (and ``use_async_envs`` for the synchronous runs). Everything else is LeRobot's defaults.
 """
 
 import json
@@ -20,22 +20,25 @@ import pytest
 from colorsort.benchmark.evaluate import evaluate
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+pytestmark = pytest.mark.slow  # LeRobot's CLIs in fresh processes
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+PAGES = (DOCS / "benchmark.md", DOCS / "data.md")  # the pages that show LeRobot's commands
 BIN = Path(sys.executable).parent
 
 
-def readme_command(program: str) -> list[str]:
-    """The README's first shell command that runs ``program``, continuation lines joined, as argv."""
-    text = README.read_text().replace("\\\n", " ")
+def documented_command(program: str) -> list[str]:
+    """The docs' first shell command that runs ``program``, continuation lines joined, as argv."""
+    text = "\n".join(page.read_text() for page in PAGES).replace("\\\n", " ")
     line = next(line for line in text.splitlines() if re.search(rf"(^|\s){program}\s", line))
     argv = shlex.split(line)
     env_assignments = [a for a in argv[: argv.index(program)] if "=" in a]
-    assert env_assignments == ["HF_HUB_OFFLINE=1"], f"README's {program} command sets {env_assignments}"
+    assert env_assignments == ["HF_HUB_OFFLINE=1"], f"the docs' {program} command sets {env_assignments}"
     return argv[argv.index(program):]
 
 
 def replace_flag(argv: list[str], flag: str, value: str) -> list[str]:
-    assert any(a.startswith(f"{flag}=") for a in argv), f"README's command has no {flag}"
+    assert any(a.startswith(f"{flag}=") for a in argv), f"the docs' command has no {flag}"
     return [f"{flag}={value}" if a.startswith(f"{flag}=") else a for a in argv]
 
 
@@ -47,12 +50,12 @@ def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProce
 
 @pytest.fixture(scope="module")
 def readme_checkpoint(tmp_path_factory):
-    """README's lerobot-train command, 2 steps, on a one-episode dataset recorded with colorsort-collect's defaults."""
+    """The docs' lerobot-train command, 2 steps, on a one-episode dataset recorded with colorsort-collect's defaults."""
     from colorsort.data.collect import CollectConfig, collect
 
     work = tmp_path_factory.mktemp("readme")
     collect(CollectConfig(out=str(work / "datasets" / "colorsort"), episodes=1), progress=False, log=lambda _: None)
-    argv = replace_flag(replace_flag(readme_command("lerobot-train"), "--steps", "2"), "--batch_size", "2")
+    argv = replace_flag(replace_flag(documented_command("lerobot-train"), "--steps", "2"), "--batch_size", "2")
     train = run(argv, work, timeout=600)
     assert train.returncode == 0, train.stderr[-3000:]
     assert (work / "outputs/train/act/checkpoints/last/pretrained_model/model.safetensors").is_file()
@@ -68,7 +71,7 @@ def newest_eval_info(work: Path) -> dict:
 @pytest.mark.parametrize("batch_size,use_async,discover", [(1, None, False), (2, None, False), (2, "false", True)],
                          ids=["batch1", "batch2-async", "batch2-sync-discover-flag"])
 def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint, batch_size, use_async, discover):
-    argv = replace_flag(readme_command("lerobot-eval"), "--eval.n_episodes", str(batch_size))
+    argv = replace_flag(documented_command("lerobot-eval"), "--eval.n_episodes", str(batch_size))
     argv = replace_flag(argv, "--eval.batch_size", str(batch_size))
     if use_async is not None:
         argv.append(f"--eval.use_async_envs={use_async}")
@@ -184,14 +187,14 @@ def test_a_lerobot_policy_runs_an_episode_through_lerobots_env_config(tiny_datas
 
 
 
-def test_readme_command_makes_a_state_only_copy_of_a_dataset_with_cameras(tiny_dataset, tmp_path):
-    """README's lerobot-edit-dataset command, verbatim: the camera features go, states and actions stay."""
+def test_documented_command_makes_a_state_only_copy_of_a_dataset_with_cameras(tiny_dataset, tmp_path):
+    """The docs' lerobot-edit-dataset command, verbatim: the camera features go, states and actions stay."""
     import shutil
 
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     shutil.copytree(tiny_dataset, tmp_path / "datasets" / "colorsort")
-    result = run(readme_command("lerobot-edit-dataset"), tmp_path, timeout=300)
+    result = run(documented_command("lerobot-edit-dataset"), tmp_path, timeout=300)
     assert result.returncode == 0, result.stderr[-3000:]
     original = LeRobotDataset("local/colorsort", root=tmp_path / "datasets" / "colorsort", video_backend="pyav")
     state_only = LeRobotDataset("local/colorsort-state", root=tmp_path / "datasets" / "colorsort-state")

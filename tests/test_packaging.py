@@ -35,12 +35,14 @@ def wheel(tmp_path_factory) -> Path:
     return whl
 
 
+@pytest.mark.slow
 def test_wheel_lists_the_mjcf_assets(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     missing = [a for a in ASSETS if a not in names]
     assert not missing, f"missing from {wheel.name}: {missing}"
 
 
+@pytest.mark.slow
 def test_task_builds_from_the_installed_wheel(wheel, tmp_path):
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target), str(wheel)],

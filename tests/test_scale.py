@@ -22,6 +22,8 @@ from colorsort.data.config import CollectConfig
 from colorsort.data.store import MARKER, SHARD_MARKER
 from colorsort.executors.base import ExecutorConfig
 
+pytestmark = pytest.mark.slow  # Ray clusters, killed workers, interrupted runs
+
 ray = pytest.importorskip("ray")
 
 # Four state-only episodes of two boxes each: long enough (seconds per episode) to kill a worker mid-shard.
@@ -198,15 +200,15 @@ def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_command(tmp_path)
     assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]
 
 
-def readme_ray_commands() -> list[list[str]]:
-    """README's commands that run on Ray, verbatim."""
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    return [shlex.split(line) for line in readme.splitlines()
+def documented_ray_commands() -> list[list[str]]:
+    """The commands docs/scaling.md runs on Ray, verbatim."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "scaling.md").read_text()
+    return [shlex.split(line) for line in page.splitlines()
             if line.startswith("colorsort-") and "--executor ray" in line]
 
 
-@pytest.mark.parametrize("argv", readme_ray_commands(), ids=lambda a: a[0])
-def test_readme_ray_commands_work_as_written(argv, tmp_path):
+@pytest.mark.parametrize("argv", documented_ray_commands(), ids=lambda a: a[0])
+def test_documented_ray_commands_work_as_written(argv, tmp_path):
     job = subprocess.run([str(Path(sys.executable).parent / argv[0])] + argv[1:], cwd=tmp_path, capture_output=True,
                          text=True, timeout=600)
     assert job.returncode == 0, job.stderr[-3000:]

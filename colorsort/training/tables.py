@@ -11,7 +11,9 @@ A Markdown page marks where a baseline's table goes::
 test fails when a page differs from what its JSON gives. Kinds:
 
 - ``table``: every scored row (with several training seeds: mean, range and each seed);
-- ``curve``: the learning curve, success on the main variant at each checkpoint.
+- ``curve``: the learning curve, success on the main variant at each checkpoint;
+- ``headline``: with ``baselines`` as the folder, one line per shipped baseline that has a
+  ``scores.json``: its inputs and its success on each variant (the landing page's table).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from pathlib import Path
 
 from colorsort.training.report import curve_table, summary_table
 
-KINDS = ("table", "curve")
+KINDS = ("table", "curve", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
 
 
@@ -44,9 +46,33 @@ def render(scores: dict, kind: str) -> str:
     raise ValueError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
 
 
+def headline(folder: Path) -> str:
+    """A Markdown table: per baseline in ``folder`` (each subfolder with a ``scores.json``), success per variant."""
+    lines = ["| baseline | inputs | training | success on each variant (95% CI, episodes) |",
+             "| --- | --- | --- | --- |"]
+    for path in sorted(folder.glob("*/scores.json")):
+        scores = json.loads(path.read_text())
+        rows = scores["rows"]
+        largest = [r for r in rows if r["demos_tried"] == max(x["demos_tried"] for x in rows)]
+        cells = []
+        for r in largest:
+            lo, hi = r["success_ci95"]
+            cells.append(f"`{r['variant']}` {100 * r['success_rate']:.0f}% "
+                         f"({100 * lo:.0f}-{100 * hi:.0f}%, {r['episodes']})")
+        first = largest[0]
+        training = f"{first['demos']} demos, {first['steps']} updates, {first['train_minutes']:.0f} min on the CPU"
+        name = path.parent.name
+        lines.append(f"| [`{name}`]({folder.name}/{name}/README.md) | {label(scores).removeprefix('ACT, ')} | "
+                     f"{training} | {'; '.join(cells)} |")
+    return "\n".join(lines)
+
+
 def fill(text: str, root: Path) -> str:
     """``text`` with every scores block rewritten from ``root/<dir>/scores.json``."""
     def block(m: re.Match) -> str:
+        if m["kind"] == "headline":
+            note = f"Written by `python demos/baseline_tables.py` from `{m['dir']}/*/scores.json`:"
+            return f"{m[1]}{note}\n\n{headline(root / m['dir'])}\n\n{m[5]}"
         path = root / m["dir"] / "scores.json"
         if not path.is_file():
             raise ValueError(f"a scores block names {m['dir']}, which has no scores.json")

@@ -1,0 +1,104 @@
+"""The documentation: README as a landing page, every link resolving inside the repository, its commands run.
+
+The commands the docs pages show are run verbatim by the tests of their concepts (``test_lerobot_cli``,
+``test_scale``, ``test_baseline``); README's own code blocks are either run here or are copies of
+a docs page's block, so every command a user reads is one a test ran.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+README = REPO / "README.md"
+PAGES = [README, *sorted((REPO / "docs").rglob("*.md")), *sorted((REPO / "baselines").glob("*/README.md")),
+         *sorted((REPO / "colorsort" / "assets").glob("*/README.md"))]
+LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+FENCE = re.compile(r"^```(\w*)\n(.*?)^```", re.S | re.M)
+
+
+def slug(heading: str) -> str:
+    """GitHub's anchor for a Markdown heading."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def anchors(page: Path) -> set[str]:
+    text = FENCE.sub("", page.read_text())
+    return {slug(line.lstrip("#")) for line in text.splitlines() if line.startswith("#")}
+
+
+def test_readme_is_a_landing_page():
+    lines = README.read_text().splitlines()
+    assert len(lines) <= 200, f"README.md has {len(lines)} lines: move guides to docs/"
+    for page in ("task", "expert", "tracking", "data", "scaling", "benchmark", "baselines", "speed",
+                 "architecture", "stack"):
+        assert f"(docs/{page}.md)" in README.read_text(), f"README's map of the docs misses docs/{page}.md"
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(REPO)))
+def test_every_link_resolves_inside_the_repository(page):
+    for target in LINK.findall(FENCE.sub("", page.read_text())):
+        if target.startswith(("http://", "https://", "mailto:")):
+            continue
+        path, _, anchor = target.partition("#")
+        resolved = (page.parent / path).resolve() if path else page
+        assert resolved.is_relative_to(REPO), f"{page.name}: {target} points outside the repository"
+        assert resolved.exists(), f"{page.name}: {target} does not exist"
+        if anchor and resolved.suffix == ".md":
+            assert anchor in anchors(resolved), f"{page.name}: {target}: no heading with that anchor"
+
+
+def test_nothing_points_outside_the_repository():
+    """No file names notes that only the authors' machines had."""
+    tracked = subprocess.run(["git", "ls-files"], cwd=REPO, capture_output=True, text=True).stdout.split()
+    if not tracked:
+        pytest.skip("not a git checkout")
+    outside = re.compile(r"\.\./shared|DESIGN\.md|STACK\.md")
+    for name in tracked:
+        path = REPO / name
+        if path.suffix in (".py", ".md", ".toml", ".txt", ".ini", ".cfg", ".json") or name in ("Makefile",):
+            text = path.read_text(errors="replace")
+            assert not outside.search(text), f"{name} points outside the repository: {outside.search(text)[0]}"
+
+
+def readme_blocks(language: str) -> list[str]:
+    return [body for lang, body in FENCE.findall(README.read_text()) if lang == language]
+
+
+def test_readmes_shell_blocks_are_the_docs_tested_ones_or_run_here():
+    """A README command block is a copy of a docs page's block (whose test runs it) or the expert's
+    command, which ``test_readmes_expert_command_runs_as_written`` runs."""
+    docs = "\n".join(p.read_text() for p in sorted((REPO / "docs").glob("*.md")))
+    for body in readme_blocks(""):
+        assert body in docs or body.startswith("colorsort-sort "), f"README block not in the docs:\n{body}"
+
+
+def test_readmes_python_snippet_runs(tmp_path):
+    (snippet,) = readme_blocks("python")
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    result = subprocess.run([sys.executable, "-c", snippet + "\nassert not done and reward >= 0\n"], cwd=tmp_path,
+                            env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-3000:]
+
+
+@pytest.mark.slow
+def test_readmes_expert_command_runs_as_written(tmp_path):
+    (line,) = [b.strip() for b in readme_blocks("") if b.startswith("colorsort-sort ")]
+    argv = shlex.split(line)
+    result = subprocess.run([str(Path(sys.executable).parent / argv[0]), *argv[1:]], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr[-3000:]
+    import json
+
+    report = json.loads((tmp_path / "outputs" / "sort.json").read_text())
+    assert (tmp_path / "outputs" / "sort.mp4").stat().st_size > 10_000
+    wanted = int(argv[argv.index("--boxes") + 1])
+    assert report["correct"] == len(report["boxes"]) == wanted, report
+    assert report["misplaced"] == report["dropped"] == 0 and all(b["bin"] == b["true_color"] for b in report["boxes"])
