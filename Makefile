@@ -9,11 +9,11 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export HF_HUB_OFFLINE := 1
 
-.PHONY: install demo test bench baseline clean
+.PHONY: install demo test test-fast lint bench baseline clean
 
 install: $(STAMP)
 
-$(STAMP): setup.py overrides.txt $(PLUGIN)/pyproject.toml
+$(STAMP): setup.py pyproject.toml overrides.txt $(PLUGIN)/pyproject.toml
 	@test -n "$(PY)" || sh tools/find-python
 	@# a .venv from an older Python (3.11, before LeRobot 0.6) is rebuilt
 	$(VENV)/bin/python -c 'import sys; sys.exit(sys.version_info < (3, 12))' 2>/dev/null || rm -rf $(VENV)
@@ -35,9 +35,16 @@ demo: $(STAMP)
 	@echo "  outputs/demo_episode0.mp4, .png       its episode 0 replayed from the stored states at 640x480"
 	@echo "  outputs/eval_expert_default.json      the expert on the benchmark's default variant (3 episodes)"
 
-test: $(STAMP)
+lint: $(STAMP)
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
+
+test: lint
 	$(VENV)/bin/python -m pytest -q tests
+
+# the tests not marked slow (pytest.ini says which those are)
+test-fast: lint
+	$(VENV)/bin/python -m pytest -q -m "not slow" tests
 
 bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_env.py

@@ -33,7 +33,7 @@ INSTALL_REQUIRES = [
 ]
 
 EXTRAS_REQUIRE = {
-    "dev": ["pytest>=8", "build>=1.2", "ruff>=0.17.6,<0.18"],
+    "dev": ["pytest>=8", "build>=1.2", "ruff>=0.17.6,<0.18", "mypy>=2.4,<2.5"],
 }
 
 setup(

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 # Box and bin colours the cell knows, as RGBA in [0, 1]. Red, green and blue have bins.
 COLORS: dict[str, tuple[float, float, float, float]] = {
@@ -164,7 +165,7 @@ def sorting_time_limit(boxes: int, task: TaskConfig) -> float:
     return 3.0 * boxes * task.spawn_period + 60.0 + 1.5 / task.belt_speed
 
 
-def make_config(preset: str = "default", **overrides: object) -> TaskConfig:
+def make_config(preset: str = "default", **overrides: Any) -> TaskConfig:
     """A preset's ``TaskConfig`` with fields overridden by keyword.
 
     Raises:

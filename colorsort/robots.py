@@ -59,10 +59,18 @@ def _controller() -> dict:
     return json.loads(Path(asset_path("controllers", "joint_position_absolute.json")).read_text())
 
 
+def _mjcf_attribute(root: ET.Element, xpath: str, name: str, path: str) -> str:
+    element = root.find(xpath)
+    value = element.get(name) if element is not None else None
+    if value is None:
+        raise ValueError(f"{path}: no {xpath} with a {name!r} attribute")
+    return value
+
+
 def _from_mjcf(name: str, path: str, base: tuple[float, float, float]) -> RobotSpec:
     root = ET.parse(path).getroot()
-    home = root.find("keyframe/key[@name='home']").get("qpos")
-    speeds = root.find("custom/numeric[@name='joint_velocity_limits']").get("data")
+    home = _mjcf_attribute(root, "keyframe/key[@name='home']", "qpos", path)
+    speeds = _mjcf_attribute(root, "custom/numeric[@name='joint_velocity_limits']", "data", path)
     return RobotSpec(name, tuple(float(v) for v in home.split()), base, tuple(float(v) for v in speeds.split()))
 
 

@@ -73,8 +73,8 @@ class Variant:
             return Lighting()
         warm, cold = np.array([1.0, 0.8, 0.6]), np.array([0.7, 0.85, 1.0])
         mix = rng.uniform()
-        tint = tuple(float(v) for v in (1 - mix) * warm + mix * cold)
-        return Lighting(brightness=float(rng.uniform(0.5, 1.6)), tint=tint)
+        r, g, b = ((1 - mix) * warm + mix * cold).tolist()
+        return Lighting(brightness=float(rng.uniform(0.5, 1.6)), tint=(r, g, b))
 
 
 VARIANTS: dict[str, Variant] = {v.name: v for v in (

@@ -77,11 +77,11 @@ def test_videos_decode_to_the_frames_the_env_rendered(ds, tiny_dataset):
     """Re-run episode 0's seed (the run is deterministic) and compare its camera frames with the video."""
     from colorsort.data.config import CollectConfig
     from colorsort.data.recorder import make_recording_env
-    from colorsort.expert.sorter import SortingExpert
+    from colorsort.expert.factory import make_expert
 
     env = make_recording_env(CollectConfig(**TINY))
     obs = env.reset(seed=0)
-    expert = SortingExpert.from_env(env)
+    expert = make_expert(env)
     expert.reset(obs)
     frames = {cam: [] for cam in TINY["cameras"]}
     for _ in range(ds.meta.episodes[0]["length"]):

@@ -5,7 +5,8 @@ import signal
 
 import pytest
 
-from colorsort.executors.base import ExecutorConfig, Task, chunks, make_executor
+from colorsort.executors.base import ExecutorConfig, Task, chunks
+from colorsort.executors.factory import make_executor
 
 
 def square(x, ctx):

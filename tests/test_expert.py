@@ -7,13 +7,14 @@ import pytest
 from conftest import make_env
 
 from colorsort.cli.sort import main as sort_main
-from colorsort.expert.sorter import Phase, SortingExpert
+from colorsort.expert.factory import make_expert
+from colorsort.expert.sorter import Phase
 
 
 def make_expert_env(robot="IRB140", **kwargs):
     env = make_env(robot, has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor"], **kwargs)
     obs = env.reset()
-    expert = SortingExpert.from_env(env)
+    expert = make_expert(env)
     expert.reset(obs)
     return env, expert, obs
 
@@ -96,7 +97,7 @@ def test_expert_needs_the_sensor_camera():
     env = make_env()
     env.reset()
     with pytest.raises(ValueError, match="sensor camera"):
-        SortingExpert.from_env(env)
+        make_expert(env)
     env.close()
 
 

@@ -44,6 +44,57 @@ def runtime_imports(path: Path) -> set[str]:
     return found
 
 
+def all_imports(path: Path) -> set[str]:
+    """Every colorsort module ``path`` names in an import: at module level, in functions, and type-only."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("colorsort"):
+            found.add(node.module)
+            found.update(f"{node.module}.{a.name}" for a in node.names)
+        elif isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.startswith("colorsort"))
+    return found
+
+
+def import_cycles() -> list[list[str]]:
+    """The import graph's cycles (strongly connected groups of modules), type-only and deferred imports included."""
+    known = {name for name, _ in modules()}
+    graph = {name: sorted(t for t in all_imports(path) if t in known and t != name) for name, path in modules()}
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    groups = []
+
+    def visit(v: str) -> None:  # Tarjan's algorithm
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                groups.append(sorted(group))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return groups
+
+
+def test_no_import_cycles_between_modules():
+    """Not even through ``if TYPE_CHECKING:`` or an import inside a function: a cycle is a design to untangle."""
+    assert import_cycles() == []
+
+
 def test_every_import_points_down_the_layers():
     known = {name for name, _ in modules()}
     upward = []

@@ -5,12 +5,12 @@ import pytest
 from conftest import make_env
 
 from colorsort.cell.sim_state import rng_from_words, rng_to_words
-from colorsort.expert.sorter import SortingExpert
+from colorsort.expert.factory import make_expert
 
 
 def record(env, seed: int, steps: int):
     obs = env.reset(seed=seed)
-    expert = SortingExpert.from_env(env)
+    expert = make_expert(env)
     expert.reset(obs)
     states, frames, actions = [env.get_sim_state()], [obs["scene_image"]], []
     for _ in range(steps):

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from conftest import make_env
 
-from colorsort.expert.sorter import Cycle, SortingExpert
+from colorsort.expert.factory import make_expert
+from colorsort.expert.sorter import Cycle
 from colorsort.expert.tracking import Sighting, TrackingExpert
 
 
@@ -31,7 +32,7 @@ def test_the_belt_never_stops_while_boxes_pass_the_ray_and_the_encoder_counts_be
 def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins(robot):
     env = tracking_env(robot=robot, ignore_done=True)
     obs = env.reset(seed=1)
-    expert = SortingExpert.from_env(env)
+    expert = make_expert(env)
     assert isinstance(expert, TrackingExpert)
     expert.reset(obs)
     belt_stopped = 0
@@ -47,7 +48,7 @@ def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins(ro
 def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped():
     env = tracking_env(ignore_done=True, spawn_period=600.0)  # one box, spawned at reset, rides far upstream
     obs = env.reset(seed=2)
-    expert = SortingExpert.from_env(env)
+    expert = make_expert(env)
     expert.reset(obs)
     obs, _, _, _ = env.step(expert.act(obs))
     lo, _ = expert.window

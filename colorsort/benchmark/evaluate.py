@@ -15,7 +15,7 @@ from tqdm import tqdm
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
-from colorsort.cell.cameras import parse_cameras
+from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.executors.base import (
     DEFAULT_SHARD_SIZE,
     ExecutorConfig,
@@ -23,8 +23,8 @@ from colorsort.executors.base import (
     TaskContext,
     chunks,
     forwarded_env,
-    make_executor,
 )
+from colorsort.executors.factory import make_executor
 from colorsort.variants import Variant, get_variant
 
 
@@ -43,8 +43,8 @@ class EvalSettings:
 
     policy: str
     variant: str
-    image_size: tuple[int, int] = (128, 128)  # (height, width) [px]
-    cameras: tuple[str, ...] = ("scene", "wrist")
+    image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE  # (height, width) [px]
+    cameras: tuple[str, ...] = DEFAULT_CAMERAS
     episode_length: int | None = None  # steps before truncation; None: the variant's time limit
 
 
@@ -140,8 +140,8 @@ def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(
     return [r.value for r in results], sum(r.attempts > 1 for r in results)
 
 
-def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int, seed: int | None = None,
-                      image_size: tuple[int, int] = (128, 128), cameras: tuple[str, ...] = ("scene", "wrist"),
+def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int, *, seed: int | None = None,
+                      image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, cameras: tuple[str, ...] = DEFAULT_CAMERAS,
                       progress: bool = True, episode_length: int | None = None,
                       executor: ExecutorConfig = ExecutorConfig(),
                       shard_size: int = DEFAULT_SHARD_SIZE) -> list[EvalReport]:
@@ -153,7 +153,7 @@ def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int,
     jobs, owner = [], []
     per_variant = max(1, executor.workers // len(variants))  # jobs per variant that keep every worker busy
     for k, variant in enumerate(variants):
-        settings = EvalSettings(path, variant.name, tuple(image_size), tuple(cameras), episode_length)
+        settings = EvalSettings(path, variant.name, (image_size[0], image_size[1]), tuple(cameras), episode_length)
         for block in chunks(episode_seeds(variant, episodes, seed), shard_size, per_variant):
             jobs.append(EvalJob(settings, tuple(block)))
             owner.append(k)
@@ -162,15 +162,16 @@ def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int,
     return [aggregate(str(policy_spec), v.name, rs) for v, rs in zip(variants, per, strict=True)]
 
 
-def evaluate(policy_spec: str, variant_name: str, episodes: int, seed: int | None = None,
-             image_size: tuple[int, int] = (128, 128), cameras: tuple[str, ...] = ("scene", "wrist"),
+def evaluate(policy_spec: str, variant_name: str, episodes: int, *, seed: int | None = None,
+             image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, cameras: tuple[str, ...] = DEFAULT_CAMERAS,
              progress: bool = True, episode_length: int | None = None, envs: int = 1,
              executor: ExecutorConfig | None = None, shard_size: int = DEFAULT_SHARD_SIZE) -> EvalReport:
     """``episodes`` episodes of a policy on one variant, on ``envs`` local processes (or ``executor``)."""
     if envs < 1:
         raise ValueError(f"envs={envs}: give at least 1")
-    return evaluate_variants(policy_spec, [variant_name], episodes, seed, image_size, cameras, progress,
-                             episode_length, executor or ExecutorConfig(workers=envs), shard_size)[0]
+    return evaluate_variants(policy_spec, [variant_name], episodes, seed=seed, image_size=image_size, cameras=cameras,
+                             progress=progress, episode_length=episode_length,
+                             executor=executor or ExecutorConfig(workers=envs), shard_size=shard_size)[0]
 
 
 def observation_settings(policy_spec: str, cameras: str | None,
@@ -185,11 +186,11 @@ def observation_settings(policy_spec: str, cameras: str | None,
     given = parse_cameras(cameras) if cameras is not None else None
     size = (image_size, image_size) if image_size is not None else None
     if policy_spec in ("expert", "random"):
-        return (given if given is not None else ("scene", "wrist")), size or (128, 128)
+        return (given if given is not None else DEFAULT_CAMERAS), size or DEFAULT_IMAGE_SIZE
     trained, trained_size = checkpoint_cameras(policy_spec)
     if given is not None and set(given) != set(trained):
         raise ValueError(f"{policy_spec} was trained on cameras {list(trained) or 'none'}; got --cameras {cameras}")
     if size is not None and trained_size is not None and size != trained_size:
         raise ValueError(f"{policy_spec} was trained on {trained_size[0]}x{trained_size[1]} images; "
                          f"got --image-size {image_size}")
-    return trained, trained_size or size or (128, 128)
+    return trained, trained_size or size or DEFAULT_IMAGE_SIZE

@@ -24,7 +24,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from colorsort.cell.cameras import check_cameras
+from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, check_cameras
 from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome, judge
 from colorsort.config import is_distractor
@@ -51,10 +51,12 @@ class ColorSortGymEnv(gym.Env):
             (``gym.make(..., max_episode_steps=N)`` adds Gymnasium's own ``TimeLimit`` on top.)
     """
 
+    action_space: spaces.Box  # joint targets [rad], suction, belt pass
+
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
-    def __init__(self, variant: str | Variant = "default", cameras: tuple[str, ...] = ("scene", "wrist"),
-                 image_size: tuple[int, int] = (128, 128), fps: int = 20, render_mode: str | None = "rgb_array",
+    def __init__(self, variant: str | Variant = "default", cameras: tuple[str, ...] = DEFAULT_CAMERAS,
+                 image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, fps: int = 20, render_mode: str | None = "rgb_array",
                  episode_length: int | None = None):
         self.variant = get_variant(variant) if isinstance(variant, str) else variant
         if render_mode not in (None, "rgb_array"):
@@ -71,7 +73,7 @@ class ColorSortGymEnv(gym.Env):
         self._max_episode_steps = episode_length or int(np.ceil(self.variant.time_limit * fps))
         self.metadata = {**self.metadata, "render_fps": fps}
         robot = ROBOTS[self.variant.robot]
-        obs_spaces = {
+        obs_spaces: dict[str, spaces.Space] = {
             "agent_pos": spaces.Box(-np.inf, np.inf, (state_size(robot.n_joints, self.variant.task_config.tracking),),
                                     np.float32),
             "environment_state": spaces.Box(-np.inf, np.inf, (ENV_STATE_SIZE,), np.float32),
@@ -142,7 +144,8 @@ class ColorSortGymEnv(gym.Env):
 
     # ------------------------------------------------------------------ helpers
     def _observation(self) -> dict[str, Any]:
-        obs = {"agent_pos": robot_state(self.env, self.raw_obs), "environment_state": box_state(self.env)}
+        obs: dict[str, Any] = {"agent_pos": robot_state(self.env, self.raw_obs),
+                               "environment_state": box_state(self.env)}
         if self.cameras:
             obs = {"pixels": {c: self.raw_obs[f"{c}_image"] for c in self.cameras}, **obs}
         return obs

@@ -21,7 +21,7 @@ from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
-from colorsort.cell.cameras import parse_cameras
+from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.data.schema import ENV_STATE_SIZE, state_size
 from colorsort.robots import ROBOTS
 from colorsort.variants import Variant, get_variant, gym_ids
@@ -46,13 +46,15 @@ class ColorSortEnv(EnvConfig):
 
     task: str | None = "ColorSort-v0"
     fps: int = 20  # control rate [Hz], as recorded
-    cameras: str = "scene,wrist"  # comma-separated, as recorded by colorsort-collect --cameras; "none" for none
-    image_size: int = 128  # square camera images [px]
+    cameras: str = ",".join(DEFAULT_CAMERAS)  # comma-separated, as colorsort-collect --cameras records; "none"
+    image_size: int = DEFAULT_IMAGE_SIZE[0]  # square camera images [px]
     episode_length: int | None = None  # steps before truncation; default: the variant's time limit
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        if self.task is None:
+            raise ValueError("--env.task: give a ColorSort task, e.g. ColorSort-Default-v0 (colorsort-eval --list)")
         variant = variant_of_task(self.task)
         n = ROBOTS[variant.robot].n_joints
         self.features = {

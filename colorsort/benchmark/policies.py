@@ -32,11 +32,11 @@ class ExpertPolicy:
     name = "expert"
 
     def reset(self, env: ColorSortGymEnv, seed: int) -> None:
-        from colorsort.expert.sorter import SortingExpert
+        from colorsort.expert.factory import make_expert
 
         self.env = env
         if getattr(self, "_for", None) is not env.env:  # the expert's IK and drop points: once per env
-            self.expert, self._for = SortingExpert.from_env(env.env), env.env
+            self.expert, self._for = make_expert(env.env), env.env
         self.expert.reset(env.raw_obs)
 
     def act(self, obs: dict[str, Any]) -> np.ndarray:
@@ -49,11 +49,12 @@ class RandomPolicy:
     name = "random"
 
     def reset(self, env: ColorSortGymEnv, seed: int) -> None:
-        self.space = env.action_space
+        self.low = np.asarray(env.action_space.low, dtype=np.float64)
+        self.high = np.asarray(env.action_space.high, dtype=np.float64)
         self.rng = np.random.default_rng(seed)
 
     def act(self, obs: dict[str, Any]) -> np.ndarray:
-        return self.rng.uniform(self.space.low, self.space.high).astype(np.float32)
+        return np.asarray(self.rng.uniform(self.low, self.high), dtype=np.float32)
 
 
 class LeRobotPolicy:

@@ -18,6 +18,7 @@ from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sorting_time_limit
 from colorsort.data.video import VideoWriter, contact_sheet, save_png
+from colorsort.expert.factory import make_expert
 from colorsort.expert.sorter import SortingExpert
 from colorsort.robots import get_robot
 
@@ -87,7 +88,7 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
     env = ColorSort(robots=config.robot, preset=config.preset, use_camera_obs=bool(config.video), camera_names="scene",
                     camera_heights=h, camera_widths=w, ignore_done=True, seed=config.seed, time_limit=limit)
     obs = env.reset()
-    expert = SortingExpert.from_env(env)
+    expert = make_expert(env)
     expert.reset(obs)
     writer = VideoWriter(config.video, fps=env.control_freq) if config.video else None
     report = SortReport()
@@ -133,7 +134,7 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
         bar.close()
         if writer is not None:
             writer.close()
-            if thumbs:
+            if thumbs and config.video:
                 save_png(Path(config.video).with_suffix(".png"), contact_sheet(thumbs))
         env.close()
     report.let_go = getattr(expert, "let_go", 0)

@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 
 from colorsort.cell.models.arena import park_position
-from colorsort.config import COLORS, CellLayout
+from colorsort.config import BIN_COLORS, COLORS, CellLayout
 
 
 class BoxStatus(Enum):
@@ -114,6 +114,23 @@ class BoxPool:
         """Collisions and gravity as ``status`` has them (after a sim state was set)."""
         self.set_collidable(box, status is not BoxStatus.PARKED)
         self.model.body_gravcomp[self.body[box.index]] = float(status is BoxStatus.PARKED)
+
+    def get_state(self) -> np.ndarray:
+        """(pool size, 4) int, per box: colour (index in ``config.COLORS``, -1 while parked), status (index in
+        ``BoxStatus``), bin (index in ``BIN_COLORS``, -1 for none), serial. Poses are MuJoCo's state."""
+        colors, statuses = list(COLORS), list(BoxStatus)
+        return np.array([(colors.index(b.color) if b.status is not BoxStatus.PARKED else -1, statuses.index(b.status),
+                          BIN_COLORS.index(b.bin) if b.bin is not None else -1, b.serial) for b in self.boxes])
+
+    def set_state(self, state: np.ndarray) -> None:
+        """Every box as ``get_state`` saved it: bookkeeping, colour, collisions and gravity."""
+        colors, statuses = list(COLORS), list(BoxStatus)
+        for box, (color, status, bin_index, serial) in zip(self.boxes, state, strict=True):
+            box.status, box.serial = statuses[status], int(serial)
+            box.bin = BIN_COLORS[bin_index] if bin_index >= 0 else None
+            if color >= 0:  # a parked box's colour is whatever it last had: out of sight, not part of the state
+                self.paint(box, colors[color])
+            self.restore(box, box.status)
 
     def spawn_point_clear(self) -> bool:
         """No box in play within 1.5 box sizes of the spawn point along the belt."""

@@ -16,6 +16,8 @@ import numpy as np
 from robosuite.utils.observables import sensor
 
 CAMERAS: tuple[str, ...] = ("scene", "sensor", "wrist")
+DEFAULT_CAMERAS: tuple[str, ...] = ("scene", "wrist")  # what a dataset records and a policy sees by default
+DEFAULT_IMAGE_SIZE: tuple[int, int] = (128, 128)  # (height, width) [px] of every camera by default
 WRIST_CAMERA_MJCF = "gripper0_right_wrist"  # robosuite prefixes the gripper's camera name
 
 
@@ -48,6 +50,9 @@ def tune_visual(root: ET.Element) -> None:
     and images stay crisp at 128 px), and a dim headlight without glare: MuJoCo's default (diffuse
     0.4, specular 0.5) shines straight down the sensor camera's axis and washes box colours out."""
     visual = root.find("visual")
+    if visual is None:
+        visual = root.makeelement("visual", {})
+        root.append(visual)
     quality = visual.find("quality")
     if quality is None:
         quality = visual.makeelement("quality", {})

@@ -44,6 +44,13 @@ class Belt:
         self.running, self.box_detected, self.belt_pass = True, False, False
         self.travel = 0.0
 
+    def get_state(self) -> tuple[bool, bool, float]:
+        """(belt-pass command, running, travel [m]); the slide joint is MuJoCo's state."""
+        return self.belt_pass, self.running, self.travel
+
+    def set_state(self, belt_pass: bool, running: bool, travel: float) -> None:
+        self.belt_pass, self.running, self.travel = belt_pass, running, travel
+
     def sense(self) -> bool:
         """Read the ray (from the last computed sensor data) into ``box_detected``."""
         distance = self.data.sensordata[self.ray]
@@ -78,6 +85,13 @@ class Spawner:
 
     def reset(self) -> None:
         self.next_time, self.next_serial = 0.0, 0
+
+    def get_state(self) -> tuple[float, int]:
+        """(next spawn time [s], next serial)."""
+        return self.next_time, self.next_serial
+
+    def set_state(self, next_time: float, next_serial: int) -> None:
+        self.next_time, self.next_serial = next_time, next_serial
 
     def put(self, box: Box, color: str, x: float, y: float, yaw: float) -> None:
         """Set ``box`` down on the belt at (x, y) [m], turned ``yaw`` [rad], with the next serial."""

@@ -1,42 +1,13 @@
 """The ColorSort task: a robot sorts coloured boxes off a conveyor into the bins of their colour.
 
-Spec sheet
-----------
-Action (8,) for the IRB 140: absolute joint position targets for the arm's six joints [rad],
-    suction in [-1, 1] (> 0 is on), then belt pass in [-1, 1] (> 0 runs the belt even while
-    the ray sensor sees a box: how a box with no bin is let through). Other
-    ``controller_configs`` change the arm part as in robosuite; Panda has 7 joints, so 9.
-    NaN or infinite elements raise ``ValueError`` (naming them) before anything moves. Finite
-    values outside ``action_spec`` are clipped by robosuite's controller to its input range
-    ([-7, 7] rad); a target beyond a joint's limit drives the joint to its limit and no further.
-    Suction and belt pass act on their sign only: any positive value is on.
-Observations: robosuite proprioception (``robot0_joint_pos``, ``robot0_eef_pos``, ...);
-    ``box_detected``, ``belt_running`` and ``suction_sealed`` (the cup's vacuum switch) as 1.0
-    or 0.0, ``belt_travel`` (the belt's encoder [m]); with ``use_camera_obs`` the images
-    ``scene_image``, ``sensor_image``, ``wrist_image`` (H, W, 3) uint8, right side up.
-Belt: carries boxes toward the arm at ``belt_speed`` [m/s]; stops while the ray is blocked,
-    unless the belt-pass command is on. With ``tracking`` it never stops (the ray only reports),
-    and the ray and colour camera stand upstream (``config.layout_for``).
-Spawner: a box from the pool every ``spawn_period`` [s] at the belt's upstream end, colour
-    drawn from ``box_colors`` by the env's seeded generator, optional lateral and yaw jitter;
-    waits while the pool is empty or the spawn point is occupied.
-Events: ``env.events`` lists every box that left play (``BoxEvent``: time, serial, colour,
-    outcome, bin), for harnesses that score per box.
-Bins: a box resting inside a bin's walls is placed (its colour's bin) or misplaced; at
-    ``bin_capacity`` boxes the bin is emptied (its boxes go back to the pool) and logged.
-Outcomes: ``referee.Outcome`` (placed, misplaced, dropped, rejected).
-Reward: +1 per box placed in the bin of its colour, -1 per box misplaced or dropped, times
-    ``reward_scale``; ``reward_shaping=True`` adds a dense staged reward (reach the box, seal
-    it, carry it toward its bin, hold or drop it over the bin: see ``staged_rewards``).
-Success: ``boxes_to_sort`` boxes placed correctly, none misplaced or dropped.
-Termination: success, failure (a box misplaced or dropped), or ``time_limit`` (the horizon).
-Randomisation: only through ``seed`` (the env's own ``numpy.random.Generator``).
-State: ``get_sim_state()`` returns everything that makes an instant replayable (MuJoCo state,
-    boxes, seal, belt, clock, generator) as one float64 vector (layout: ``sim_state.py``);
-    ``set_sim_state`` restores it, after which stepping the same actions retraces the episode bit
-    for bit.
+Its specification (action, observations, ``info``, reward, success, bad actions, events,
+determinism, configuration) is written once, in ``docs/task.md``. ``get_sim_state()`` returns
+everything that makes an instant replayable as one float64 vector (layout: ``sim_state.py``);
+``set_sim_state`` restores it, after which stepping the same actions retraces the episode bit for bit.
 
-This class is robosuite glue; the cell itself is ``plant.py`` (pool, belt, spawner, seal, referee).
+This class is robosuite glue: the model, the observables, the step, the reward, and what the cell
+does not own (the clock, the seeded generator, robosuite's controllers); the cell itself is
+``plant.py`` (pool, belt, spawner, seal, referee).
 """
 
 from __future__ import annotations
@@ -52,13 +23,13 @@ from robosuite.environments.manipulation.manipulation_env import ManipulationEnv
 from robosuite.models.tasks import ManipulationTask
 from robosuite.utils.observables import Observable, sensor
 
-from colorsort.cell import cameras, sim_state
+from colorsort.cell import cameras
 from colorsort.cell.boxes import Box
 from colorsort.cell.models.arena import ConveyorArena
 from colorsort.cell.plant import Plant
 from colorsort.cell.referee import BoxEvent, Tally
 from colorsort.cell.rendering import check_gl
-from colorsort.cell.sim_state import SimStateLayout
+from colorsort.cell.sim_state import CellState, SimStateLayout, rng_from_words, rng_to_words
 from colorsort.cell.suction import add_welds
 from colorsort.config import CellLayout, Lighting, TaskConfig, layout_for, make_config
 from colorsort.paths import asset_path
@@ -85,6 +56,8 @@ class ColorSort(ManipulationEnv):
         Other arguments are robosuite's.
     """
 
+    plant: Plant  # the cell's parts, built with the model (``_setup_references``)
+
     def __init__(
         self, robots: str | list[str] = "IRB140", preset: str = "default", config: TaskConfig | None = None,
         layout: CellLayout | None = None, env_configuration: str = "default",
@@ -93,7 +66,8 @@ class ColorSort(ManipulationEnv):
         has_renderer: bool = False, has_offscreen_renderer: bool = True, render_camera: str = "scene",
         render_collision_mesh: bool = False, render_visual_mesh: bool = True, render_gpu_device_id: int = -1,
         control_freq: float = 20, servo_freq: float = 100, lite_physics: bool = True, horizon: int | None = None,
-        ignore_done: bool = False, hard_reset: bool = False, camera_names: str | list[str] = cameras.CAMERAS,
+        ignore_done: bool = False, hard_reset: bool = False,
+        camera_names: str | list[str] | tuple[str, ...] = cameras.CAMERAS,
         camera_heights: int | list[int] = 128, camera_widths: int | list[int] = 128,
         camera_depths: bool | list[bool] = False, camera_segmentations: Any = None, renderer: str = "mjviewer",
         renderer_config: dict | None = None, seed: int | None = None, reward_scale: float | None = 1.0,
@@ -387,12 +361,18 @@ class ColorSort(ManipulationEnv):
 
     def get_sim_state(self) -> np.ndarray:
         """Everything that makes this instant replayable, as one float64 vector (``sim_state.py``)."""
-        return sim_state.capture(self)
+        state = CellState(self.plant.get_state(), self.cur_time, rng_to_words(self.rng))
+        return state.pack(self.sim_state_layout)
 
     def set_sim_state(self, state: np.ndarray) -> None:
         """Restore an instant saved by ``get_sim_state`` (same robot, layout and pool size); the episode's
         counters and events are not part of the state: they keep counting from their current values."""
-        sim_state.restore(self, state)
+        s = CellState.unpack(state, self.sim_state_layout)
+        self.plant.set_state(s.plant)
+        self.cur_time, self.rng = s.clock, rng_from_words(s.rng)
+        self.timestep = int(round(self.cur_time / self.control_timestep))
+        for controller in self.robots[0].part_controllers.values():
+            controller.update(force=True)  # robosuite caches joint states and the mass matrix between steps
 
 
 def _named(name: str, fn: Callable) -> Callable:

@@ -2,11 +2,13 @@
 
 The box pool, the belt with its ray sensor, the spawner, the vacuum seal, the lights and the
 referee, stepped together: ``physics_step`` before every MuJoCo step, ``control_step`` at the end
-of every control period. ``ColorSort`` (``env.py``) is the robosuite glue around it.
+of every control period. ``ColorSort`` (``env.py``) is the robosuite glue around it. Each part
+owns its state (``get_state``/``set_state``); ``Plant.get_state`` gathers them with MuJoCo's.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import mujoco
@@ -18,6 +20,26 @@ from colorsort.cell.lighting import LightRig
 from colorsort.cell.referee import Referee
 from colorsort.cell.suction import VacuumSeal
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, Lighting, TaskConfig
+
+# The parts of MuJoCo's state that ColorSort changes while it runs.
+MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
+                 | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
+                 | mujoco.mjtState.mjSTATE_WARMSTART)
+
+
+@dataclass
+class PlantState:
+    """The plant's part of an instant (``sim_state.py`` lays it out as a vector)."""
+
+    mujoco: np.ndarray  # (mj_stateSize(MJ_STATE_SPEC),) MuJoCo's state
+    boxes: np.ndarray  # (pool size, 4) int: ``BoxPool.get_state``
+    held: int  # the sealed box's pool index, or -1
+    weld: np.ndarray  # (mjNEQDATA,) the seal's weld
+    belt_pass: bool
+    belt_running: bool
+    belt_travel: float  # [m] the belt's encoder
+    next_spawn_time: float  # [s]
+    next_serial: int
 
 
 class Plant:
@@ -51,6 +73,25 @@ class Plant:
             self.remove_box(box)
         self.belt.reset()
         self.spawn_if_due(now, rng)
+
+    def get_state(self) -> PlantState:
+        """This instant of the plant: MuJoCo's state and every part's."""
+        mj = np.empty(mujoco.mj_stateSize(self.model, MJ_STATE_SPEC))
+        mujoco.mj_getState(self.model, self.data, mj, MJ_STATE_SPEC)
+        held, weld = self.seal.get_state()
+        belt_pass, running, travel = self.belt.get_state()
+        next_time, next_serial = self.spawner.get_state()
+        return PlantState(mj, self.pool.get_state(), held, weld, belt_pass, running, travel, next_time, next_serial)
+
+    def set_state(self, s: PlantState) -> None:
+        """Back to the instant ``get_state`` saved; derived quantities (positions, sensors, the ray) recomputed."""
+        mujoco.mj_setState(self.model, self.data, s.mujoco, MJ_STATE_SPEC)
+        self.pool.set_state(s.boxes)
+        self.seal.set_state(s.held, s.weld)
+        self.belt.set_state(s.belt_pass, s.belt_running, s.belt_travel)
+        self.spawner.set_state(s.next_spawn_time, s.next_serial)
+        mujoco.mj_forward(self.model, self.data)
+        self.belt.sense()
 
     def physics_step(self) -> None:
         """Before each MuJoCo step, after the controller wrote ``ctrl``: drive the belt, seal or release."""

@@ -72,6 +72,7 @@ class Tally:
 
     def count(self, event: BoxEvent) -> None:
         if event.outcome is Outcome.PLACED:
+            assert event.bin is not None, "a placed box rests in a bin"
             self.placed[event.bin] += 1
         else:
             name = event.outcome.value

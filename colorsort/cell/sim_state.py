@@ -23,29 +23,23 @@ segment               length               what
 ====================  ===================  ==========================================================
 
 Applied forces (``qfrc_applied``, ``xfrc_applied``) are left out: ColorSort never sets them.
+
+This module is the codec only: the plant's parts give their state (``Plant.get_state``), the env adds
+its clock and generator (``ColorSort.get_sim_state``), and ``CellState`` packs them into the vector.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, fields
 
 import mujoco
 import numpy as np
 
-from colorsort.cell.boxes import BoxStatus
-from colorsort.config import BIN_COLORS, COLORS
-
-if TYPE_CHECKING:
-    from colorsort.cell.env import ColorSort
+from colorsort.cell.plant import MJ_STATE_SPEC, PlantState
 
 VERSION = 2  # 2: belt_travel (the belt's encoder) added
-# The parts of MuJoCo's state that ColorSort changes while it runs.
-MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
-                 | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
-                 | mujoco.mjtState.mjSTATE_WARMSTART)
 RNG_STATE_SIZE = 10  # a PCG64 generator's state and increment (4 x 32 bits each), then its uint32 buffer
-SCALARS = ("held", "belt_pass", "belt_running", "belt_travel", "next_spawn_time", "next_serial", "clock")
+PLANT_SCALARS = ("held", "belt_pass", "belt_running", "belt_travel", "next_spawn_time", "next_serial")
 
 
 def rng_to_words(rng: np.random.Generator) -> np.ndarray:
@@ -83,7 +77,7 @@ class SimStateLayout:
     def lengths(self) -> dict[str, int]:
         """Segment name -> length, in order (the table in the module docstring)."""
         return {"mujoco": self.mujoco_size, "boxes": 4 * self.pool_size, "held": 1, "weld": mujoco.mjNEQDATA,
-                **{name: 1 for name in SCALARS[1:]}, "rng": RNG_STATE_SIZE}
+                **{name: 1 for name in PLANT_SCALARS[1:]}, "clock": 1, "rng": RNG_STATE_SIZE}
 
     @property
     def slices(self) -> dict[str, slice]:
@@ -104,24 +98,18 @@ class SimStateLayout:
 
 @dataclass
 class CellState:
-    """One instant of the cell, segment by segment (see the module docstring)."""
+    """One instant of the cell: the plant's state, the env's clock [s] and its generator (as words)."""
 
-    mujoco: np.ndarray  # (mujoco_size,)
-    boxes: np.ndarray  # (pool_size, 4) int: colour, status, bin, serial
-    held: int
-    weld: np.ndarray  # (mjNEQDATA,)
-    belt_pass: bool
-    belt_running: bool
-    belt_travel: float  # [m]
-    next_spawn_time: float  # [s]
-    next_serial: int
+    plant: PlantState
     clock: float  # [s]
-    rng: np.ndarray  # (RNG_STATE_SIZE,) words
+    rng: np.ndarray  # (RNG_STATE_SIZE,) words: ``rng_to_words``
 
     def pack(self, layout: SimStateLayout) -> np.ndarray:
+        values = {**{f.name: getattr(self.plant, f.name) for f in fields(PlantState)},
+                  "clock": self.clock, "rng": self.rng}
         out = np.empty(layout.size, np.float64)
         for name, s in layout.slices.items():
-            out[s] = np.ravel(np.asarray(getattr(self, name), dtype=np.float64))
+            out[s] = np.ravel(np.asarray(values[name], dtype=np.float64))
         return out
 
     @classmethod
@@ -131,51 +119,9 @@ class CellState:
             raise ValueError(f"Expected a state of shape ({layout.size},), got {vector.shape}: "
                              "was it saved with another robot or pool size?")
         s = layout.slices
-        scalar = {name: vector[s[name]][0] for name in SCALARS}
-        return cls(mujoco=vector[s["mujoco"]], boxes=vector[s["boxes"]].reshape(-1, 4).astype(int),
-                   held=int(scalar["held"]), weld=vector[s["weld"]], belt_pass=bool(scalar["belt_pass"]),
-                   belt_running=bool(scalar["belt_running"]),
-                   belt_travel=float(scalar["belt_travel"]), next_spawn_time=float(scalar["next_spawn_time"]),
-                   next_serial=int(scalar["next_serial"]), clock=float(scalar["clock"]), rng=vector[s["rng"]])
-
-
-def capture(env: ColorSort) -> np.ndarray:
-    """``env``'s instant as a vector (``ColorSort.get_sim_state``)."""
-    m, d = env.mj_model, env.mj_data
-    layout = env.sim_state_layout
-    mj = np.empty(layout.mujoco_size)
-    mujoco.mj_getState(m, d, mj, MJ_STATE_SPEC)
-    colors, statuses = list(COLORS), list(BoxStatus)
-    boxes = [(colors.index(b.color) if b.status is not BoxStatus.PARKED else -1, statuses.index(b.status),
-              BIN_COLORS.index(b.bin) if b.bin is not None else -1, b.serial) for b in env.boxes]
-    held = env.plant.seal.held if env.plant.seal.held is not None else -1
-    weld = m.eq_data[env.plant.seal.welds[held]] if held >= 0 else np.zeros(mujoco.mjNEQDATA)
-    belt, spawner = env.plant.belt, env.plant.spawner
-    state = CellState(mj, np.array(boxes), held, weld, belt.belt_pass, belt.running, belt.travel, spawner.next_time,
-                      spawner.next_serial, env.cur_time, rng_to_words(env.rng))
-    return state.pack(layout)
-
-
-def restore(env: ColorSort, vector: np.ndarray) -> None:
-    """Set ``env`` to the instant ``capture`` saved (``ColorSort.set_sim_state``)."""
-    s = CellState.unpack(vector, env.sim_state_layout)
-    m, d = env.mj_model, env.mj_data
-    mujoco.mj_setState(m, d, s.mujoco, MJ_STATE_SPEC)
-    colors, statuses = list(COLORS), list(BoxStatus)
-    for box, (color, status, bin_index, serial) in zip(env.boxes, s.boxes, strict=True):
-        box.status, box.serial = statuses[status], int(serial)
-        box.bin = BIN_COLORS[bin_index] if bin_index >= 0 else None
-        if color >= 0:  # a parked box's colour is whatever it last had: out of sight, not part of the state
-            env.plant.pool.paint(box, colors[color])
-        env.plant.pool.restore(box, box.status)
-    env.plant.seal.held = s.held if s.held >= 0 else None
-    if s.held >= 0:
-        m.eq_data[env.plant.seal.welds[s.held]] = s.weld
-    env.plant.belt.belt_pass, env.plant.belt.running, env.plant.belt.travel = s.belt_pass, s.belt_running, s.belt_travel
-    env.plant.spawner.next_time, env.plant.spawner.next_serial, env.cur_time = s.next_spawn_time, s.next_serial, s.clock
-    env.rng = rng_from_words(s.rng)
-    env.timestep = int(round(env.cur_time / env.control_timestep))
-    mujoco.mj_forward(m, d)
-    env.plant.belt.sense()
-    for controller in env.robots[0].part_controllers.values():
-        controller.update(force=True)  # robosuite caches joint states and the mass matrix between steps
+        scalar = {name: vector[s[name]][0] for name in (*PLANT_SCALARS, "clock")}
+        plant = PlantState(mujoco=vector[s["mujoco"]], boxes=vector[s["boxes"]].reshape(-1, 4).astype(int),
+                           held=int(scalar["held"]), weld=vector[s["weld"]], belt_pass=bool(scalar["belt_pass"]),
+                           belt_running=bool(scalar["belt_running"]), belt_travel=float(scalar["belt_travel"]),
+                           next_spawn_time=float(scalar["next_spawn_time"]), next_serial=int(scalar["next_serial"]))
+        return cls(plant, clock=float(scalar["clock"]), rng=vector[s["rng"]])

@@ -61,6 +61,18 @@ class VacuumSeal:
             self.data.eq_active[self.welds[self.held]] = 0
             self.held = None
 
+    def get_state(self) -> tuple[int, np.ndarray]:
+        """(the sealed box's pool index or -1, the weld's ``eq_data`` (mjNEQDATA,), zeros when none)."""
+        held = self.held if self.held is not None else -1
+        weld = self.model.eq_data[self.welds[held]].copy() if held >= 0 else np.zeros(mujoco.mjNEQDATA)
+        return held, weld
+
+    def set_state(self, held: int, weld: np.ndarray) -> None:
+        """The seal as ``get_state`` saved it (whether its weld is active is MuJoCo's state)."""
+        self.held = held if held >= 0 else None
+        if held >= 0:
+            self.model.eq_data[self.welds[held]] = weld
+
     def _box_flat_on_pad(self) -> int | None:
         d = self.data
         axis = d.xmat[self.cup].reshape(3, 3)[:, 2]

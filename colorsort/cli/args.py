@@ -13,5 +13,5 @@ def parse_image_size(text: str) -> tuple[int, int]:
     if len(size) == 1:
         return size[0], size[0]
     if len(size) == 2:
-        return size  # type: ignore[return-value]
+        return size[0], size[1]
     raise ValueError(f"image size {text!r}: give one number (square) or HxW, e.g. 128 or 96x128")

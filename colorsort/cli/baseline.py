@@ -28,10 +28,11 @@ import argparse
 import shlex
 import shutil
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from colorsort.training.pipeline import UNTIL, RunSettings, run_pipeline
-from colorsort.training.recipes import RECIPES, get_recipe
+from colorsort.training.recipes import LR_SCHEDULES, RECIPES, get_recipe
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -49,6 +50,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--passes", type=float, help="train every set for this many passes over its frames instead")
     p.add_argument("--seeds", help="lerobot-train seeds, comma-separated: every set is trained once per seed")
     p.add_argument("--batch-size", type=int)
+    p.add_argument("--lr-schedule", help=f"the learning rate over training, one of {list(LR_SCHEDULES)}")
     p.add_argument("--save-every", type=int, help="updates between learning-curve checkpoints (0: none)")
     p.add_argument("--eval-variants", help="variants the largest set's policy is scored on, comma-separated")
     p.add_argument("--eval-episodes", type=int, help="evaluation episodes on the main variant")
@@ -81,6 +83,8 @@ def overrides(args: argparse.Namespace) -> dict:
         found["eval_variants"] = tuple(args.eval_variants.split(","))
     if args.cameras:
         found["cameras"] = () if args.cameras == "none" else tuple(args.cameras.split(","))
+    if args.lr_schedule:
+        found["act"] = replace(get_recipe(args.recipe).act, lr_schedule=args.lr_schedule)
     for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",
                 "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size", "device"):
         if getattr(args, key) is not None:

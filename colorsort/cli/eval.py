@@ -76,8 +76,9 @@ def main(argv: list[str] | None = None) -> int:
         executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
         cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
         names = variant_names(args.policy, args.variant)
-        reports = evaluate_variants(args.policy, names, args.episodes, args.seed, image_size, cameras,
-                                    episode_length=args.episode_length, executor=executor, shard_size=args.shard_size)
+        reports = evaluate_variants(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
+                                    cameras=cameras, episode_length=args.episode_length, executor=executor,
+                                    shard_size=args.shard_size)
     except ValueError as err:
         print(f"colorsort-eval: error: {err}", file=sys.stderr)
         return 2

@@ -23,7 +23,8 @@ from colorsort.data import store
 from colorsort.data.config import CollectConfig
 from colorsort.data.recorder import EpisodeResult
 from colorsort.data.shards import PRELOAD, ShardJob, merge, merge_in_child, record, report_of, shard_name
-from colorsort.executors.base import Task, TaskResult, chunks, forwarded_env, make_executor
+from colorsort.executors.base import Task, TaskResult, chunks, forwarded_env
+from colorsort.executors.factory import make_executor
 
 # Set for every recorder (and passed to every worker), not at import: the AV1 encoder's banner and info
 # lines off; one progress bar, not one per episode saved; Mesa's CPU renderer draws in the calling

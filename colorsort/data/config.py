@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from colorsort.cell.cameras import CAMERAS
+from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.robots import get_robot
@@ -26,8 +26,8 @@ class CollectConfig:
     seed: int = 0  # base seed
     out: str = "datasets/colorsort"  # dataset directory (LeRobot's `root`)
     repo_id: str = "local/colorsort"  # LeRobot repo id, for loading: LeRobotDataset(repo_id, root=out)
-    cameras: tuple[str, ...] = ("scene", "wrist")  # stored as observation.images.<camera>; () records state only
-    image_size: tuple[int, int] = (128, 128)  # (height, width) of every camera [px]
+    cameras: tuple[str, ...] = DEFAULT_CAMERAS  # stored as observation.images.<camera>; () records state only
+    image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE  # (height, width) of every camera [px]
     fps: int = 20  # frames per second = the env's control rate [Hz]
     workers: int = 1  # shards recorded side by side (local processes, or Ray tasks of 1 CPU)
     executor: str = "local"  # "local" (processes on this machine) or "ray" (executors.base.EXECUTORS)

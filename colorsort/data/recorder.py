@@ -21,7 +21,7 @@ from colorsort.config import sorting_time_limit
 from colorsort.data.config import CollectConfig
 from colorsort.data.late_pass import LatePass
 from colorsort.data.schema import features, frame, task_text
-from colorsort.expert.sorter import SortingExpert
+from colorsort.expert.factory import make_expert
 from colorsort.variants import get_variant
 
 STAGES = ("setup", "expert", "physics and control", "rendering", "frames to lerobot", "episode saving")
@@ -86,7 +86,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     sec = out.seconds
     t0 = time.perf_counter()
     env = make_recording_env(config)
-    expert = SortingExpert.from_env(env)
+    expert = make_expert(env)
     late = LatePass(config.late_pass)
     lighting = get_variant(config.variant).lighting if config.variant else None
     out.sim_state = env.sim_state_layout.describe()

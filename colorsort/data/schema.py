@@ -104,7 +104,7 @@ def features(env: ColorSort, cameras: tuple[str, ...], image_size: tuple[int, in
 
 def robot_state(env: ColorSort, obs: dict[str, Any]) -> np.ndarray:
     """``observation.state`` from an observation of ``env`` (see the module docstring)."""
-    flags = [env.plant.seal.commanded, env.suction_sealed, env.box_detected, env.belt_running]
+    flags: list[float] = [env.plant.seal.commanded, env.suction_sealed, env.box_detected, env.belt_running]
     if env.config.tracking:
         flags.append(env.plant.belt.travel)
     return np.concatenate([obs["robot0_joint_pos"], obs["robot0_joint_vel"], obs["robot0_eef_pos"],

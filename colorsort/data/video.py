@@ -27,18 +27,22 @@ class VideoWriter:
         self.fps = Fraction(fps).limit_denominator(1000)
         self.codec, self.crf = codec, crf
         self._container: av.container.OutputContainer | None = None
-        self._stream = None
+        self._stream: av.VideoStream | None = None
         self.frames = 0
 
     def write(self, frame: np.ndarray) -> None:
         """Append one RGB frame; the first frame fixes the size (cropped to even sides for yuv420p)."""
         h, w = frame.shape[0] // 2 * 2, frame.shape[1] // 2 * 2
-        if self._container is None:
-            self._container = av.open(str(self.path), mode="w")
-            self._stream = self._container.add_stream(self.codec, rate=self.fps)
-            self._stream.width, self._stream.height = w, h
-            self._stream.pix_fmt = "yuv420p"
-            self._stream.options = {"crf": str(self.crf)}
+        if self._container is None or self._stream is None:
+            container = av.open(str(self.path), mode="w")
+            stream = container.add_stream(self.codec, rate=self.fps)
+            if not isinstance(stream, av.VideoStream):
+                container.close()
+                raise ValueError(f"codec {self.codec!r} does not encode video")
+            stream.width, stream.height = w, h
+            stream.pix_fmt = "yuv420p"
+            stream.options = {"crf": str(self.crf)}
+            self._container, self._stream = container, stream
         video_frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame[:h, :w]), format="rgb24")
         for packet in self._stream.encode(video_frame):
             self._container.mux(packet)
@@ -46,7 +50,7 @@ class VideoWriter:
 
     def close(self) -> None:
         """Flush the encoder and close the file."""
-        if self._container is not None:
+        if self._container is not None and self._stream is not None:
             for packet in self._stream.encode():
                 self._container.mux(packet)
             self._container.close()
@@ -69,7 +73,8 @@ def save_png(path: str | Path, frame: np.ndarray) -> None:
 def read_video(path: str | Path) -> np.ndarray:
     """Decode an mp4 into RGB frames, shape (T, H, W, 3) uint8."""
     with av.open(str(path)) as container:
-        return np.stack([f.to_ndarray(format="rgb24") for f in container.decode(video=0)])
+        frames = [f.to_ndarray(format="rgb24") for f in container.decode(video=0)]
+    return np.stack(frames)
 
 
 def contact_sheet(frames: list[np.ndarray], columns: int = 4, rows: int = 3, fps: float | None = None,

@@ -90,14 +90,3 @@ def forwarded_env(extra: dict[str, str] | None = None) -> dict[str, str]:
     env.update(extra or {})
     return env
 
-
-def make_executor(config: ExecutorConfig, preload: tuple[str, ...] = (), env: dict[str, str] | None = None) -> Executor:
-    """The executor ``config`` names. ``preload``: modules local workers import once, before forking;
-    ``env``: variables every worker gets (``forwarded_env``)."""
-    if config.name == "ray":
-        from colorsort.executors.ray import RayExecutor
-
-        return RayExecutor(config, env or {})
-    from colorsort.executors.local import LocalExecutor
-
-    return LocalExecutor(config, preload)

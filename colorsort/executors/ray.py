@@ -58,7 +58,8 @@ class RayExecutor:
         remote = ray.remote(_entry).options(num_cpus=1, max_retries=self.config.retries, retry_exceptions=False)
         results = [TaskResult(t.key) for t in tasks]
         index = {t.key: i for i, t in enumerate(tasks)}
-        pending, running = deque(range(len(tasks))), {}
+        pending: deque[int] = deque(range(len(tasks)))
+        running: dict = {}
 
         def drain() -> None:
             for kind, key, payload in queue.get_nowait_batch(queue.qsize()):

@@ -135,6 +135,12 @@ class Detection:
     area: int
 
 
+def bin_for(t: Detection | None) -> str | None:
+    """The bin a sighted box goes to: its colour when it was seen whole and its colour has a bin; else None
+    (no box seen, a box partly in view, a colour with no bin): the box is let through."""
+    return t.color if t is not None and t.complete and t.color in BIN_COLORS else None
+
+
 def hue_of(rgb: tuple[float, ...]) -> float:
     """Hue [deg] of an RGB colour with components in [0, 1]."""
     return colorsys.rgb_to_hsv(*rgb[:3])[0] * 360.0

@@ -13,6 +13,7 @@ the configured acceleration and jerk limits, as the original cell's Reflexxes ca
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import mink
 import mujoco
@@ -140,6 +141,17 @@ class CupIK:
                 f"{1000 * pos_err:.1f} mm and {np.rad2deg(ang_err):.2f} deg (tolerance 1 mm, 1 deg)"
             )
         return q
+
+
+class Trajectory(Protocol):
+    """A joint motion sampled by time: a ``JointTrajectory`` or a dense path (the tracking expert's)."""
+
+    goal: np.ndarray  # [rad] the joints at the end
+
+    @property
+    def duration(self) -> float: ...
+
+    def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
 class JointTrajectory:

@@ -29,13 +29,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from colorsort.config import BIN_COLORS
-from colorsort.expert.calibration import Calibration, sensor_source
+from colorsort.expert.calibration import Calibration
 from colorsort.expert.config import ExpertConfig
-from colorsort.expert.perception import ColorSensor, Detection
-from colorsort.expert.planning import CupIK, JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion, site_yaw
+from colorsort.expert.perception import ColorSensor, Detection, bin_for
+from colorsort.expert.planning import CupIK, Trajectory, UnreachableWaypoint, Waypoint, plan_motion, site_yaw
 
 if TYPE_CHECKING:
-    from colorsort.cell.env import ColorSort
+    pass
 
 
 class Phase(Enum):
@@ -73,7 +73,7 @@ class PickPlan:
 
 @dataclass
 class _Motion:
-    trajectory: JointTrajectory
+    trajectory: Trajectory
     started: float
     tolerance: float  # [rad] max joint error that counts as arrived
 
@@ -86,7 +86,7 @@ class SortingExpert:
         sensor_image: the colour image for an observation (``calibration.sensor_source``).
         config: the expert's settings.
 
-    Use: ``expert = SortingExpert.from_env(env)``, then ``action = expert.act(obs)`` every step after
+    Use: ``expert = make_expert(env)`` (``expert/factory.py``), then ``action = expert.act(obs)`` every step after
     ``expert.reset(obs)``.
     """
 
@@ -109,19 +109,6 @@ class SortingExpert:
             Phase.RELEASE: self._release,
         }
         self.reset()
-
-    @classmethod
-    def from_env(cls, env: ColorSort, config: ExpertConfig = ExpertConfig()) -> SortingExpert:
-        """An expert calibrated on ``env``, which must have an off-screen renderer (the sensor camera);
-        on a tracking belt a ``TrackingExpert``."""
-        if not env.has_offscreen_renderer:
-            raise ValueError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
-        size, image = sensor_source(env, config.sensor_image_size)
-        if env.config.tracking and cls is SortingExpert:
-            from colorsort.expert.tracking import TrackingExpert
-
-            cls = TrackingExpert
-        return cls(Calibration.from_env(env, size), image, config)
 
     def _drop_seed(self) -> np.ndarray:
         """The joint angles [rad] the drop points' IK starts from: the wait pose, beside the bins."""
@@ -213,10 +200,9 @@ class SortingExpert:
         if float(obs["box_detected"]) <= 0.5:
             return
         self.target = t = self.sensor.box_at_sensor(self.sensor_image(obs))
-        pickable = t is not None and t.complete and t.color in BIN_COLORS
-        self.cycles.append(Cycle(t.color if t is not None else "none", self.time,
-                                 target_bin=t.color if pickable else None))
-        if not pickable:
+        target_bin = bin_for(t)
+        self.cycles.append(Cycle(t.color if t is not None else "none", self.time, target_bin=target_bin))
+        if t is None or target_bin is None:
             self.belt_pass = True
             self._enter(Phase.LET_THROUGH)
             return
@@ -245,6 +231,7 @@ class SortingExpert:
     def _approach(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._arrived(q):
             self.suction = True  # on for the last few centimetres
+            assert self.pick is not None, "APPROACH follows a planned pick"
             self._start_motion(goal, self.pick.contact, self.config.approach_tolerance)
             self._enter(Phase.DESCEND)
 
@@ -255,6 +242,7 @@ class SortingExpert:
     # 4. grip: wait for the vacuum switch
     def _grip(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if float(obs["suction_sealed"]) > 0.5:
+            assert self.pick is not None, "GRIP follows a planned pick"
             self._start_motion(goal, self.pick.lift, self.config.lift_tolerance)
             self._enter(Phase.BACK_UP)
         elif self.time - self.phase_started > self.config.grip_timeout:
@@ -267,6 +255,7 @@ class SortingExpert:
     def _back_up(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._arrived(q):
             color = self.cycles[-1].target_bin
+            assert color is not None, "only a box with a bin is picked"
             slots = self.q_drop[color]
             self._start_motion(goal, slots[self.drops[color] % len(slots)], self.config.drop_tolerance)
             self.drops[color] += 1

@@ -21,9 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from colorsort.config import BIN_COLORS, CellLayout
+from colorsort.config import CellLayout
 from colorsort.expert.calibration import Calibration
 from colorsort.expert.config import ExpertConfig
+from colorsort.expert.perception import bin_for
 from colorsort.expert.planning import JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
 from colorsort.expert.sorter import Cycle, Phase, SortingExpert, _Motion
 
@@ -88,7 +89,7 @@ def track_heights(config: ExpertConfig, layout: CellLayout, dt: float) -> np.nda
 
 class TrackingExpert(SortingExpert):
     """Sorts boxes from a belt that never stops; see the module docstring. Built like ``SortingExpert``
-    (``SortingExpert.from_env`` returns one for a tracking task).
+    (``make_expert`` returns one for a tracking task).
 
     Attributes:
         let_go: boxes of a bin colour it could not meet in time and let ride off the belt.
@@ -170,10 +171,10 @@ class TrackingExpert(SortingExpert):
     def _look(self, obs: dict) -> None:
         """One photo as the ray fires: a box of a bin colour joins the queue; any other rides on."""
         t = self.sensor.box_at_sensor(self.sensor_image(obs))
-        pickable = t is not None and t.complete and t.color in BIN_COLORS
-        cycle = Cycle(t.color if t is not None else "none", self.time, target_bin=t.color if pickable else None)
+        target_bin = bin_for(t)
+        cycle = Cycle(t.color if t is not None else "none", self.time, target_bin=target_bin)
         self.cycles.append(cycle)
-        if pickable:
+        if t is not None and target_bin is not None:
             x, y = float(t.center[0]), float(t.center[1])
             self.queue.append(Sighting(cycle, x, y, self.cup_yaw + t.yaw, self.travel))
         else:
@@ -275,17 +276,21 @@ class TrackingExpert(SortingExpert):
 
     # 3. meet the box, then follow it down, seal and lift
     def _intercept(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
+        assert self.motion is not None, "INTERCEPT follows a planned interception"
         if self.time - self.motion.started >= self.motion.trajectory.duration - 1e-9:
             self.suction = True
             self.motion = _Motion(self._track_plan, self.time, np.inf)
             self._enter(Phase.TRACK)
 
     def _track(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
+        assert self.motion is not None and self.current is not None, "TRACK follows an interception"
         path = self.motion.trajectory
+        assert isinstance(path, DensePath), "TRACK follows the box along a dense path"
         if self.time - self.motion.started < path.duration - 1e-9:
             return
         if float(obs["suction_sealed"]) > 0.5:  # 5, 6: on to the bin, from the moving state
             color = self.current.cycle.target_bin
+            assert color is not None, "only a box with a bin is met"
             slots = self.q_drop[color]
             trajectory = plan_motion(path.goal, slots[self.drops[color] % len(slots)], self.calibration.max_velocity,
                                      self.config.motion, start_velocity=path.qd[-1])
@@ -303,6 +308,7 @@ class TrackingExpert(SortingExpert):
     def _release(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         sealed = float(obs["suction_sealed"]) > 0.5
         if not sealed and self.time - self.phase_started >= self.config.release_time:
+            assert self.current is not None, "RELEASE follows a pick"
             self.current.cycle.done_at = self.time
             self.current = None
             self._start_motion(goal, self.q_wait, self.config.wait_tolerance)

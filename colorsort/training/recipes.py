@@ -20,6 +20,7 @@ from dataclasses import asdict, dataclass, replace
 IRB140_VARIANTS = ("seed", "default", "fast", "jitter", "lighting", "distractors")
 TRACKING_VARIANTS = ("tracking", "tracking-jitter", "tracking-fast")
 DEVICES = ("cpu", "cuda", "mps")
+LR_SCHEDULES = ("constant", "cosine")
 
 
 @dataclass(frozen=True)
@@ -38,8 +39,14 @@ class ActSettings:
     optimizer_lr: float = 1e-4  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
     optimizer_lr_backbone: float = 1e-4
     pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
+    lr_schedule: str = "constant"  # LeRobot's ACT preset; "cosine": warm up, then anneal to 0 at the last update
+    warmup_steps: int = 200  # updates of linear warm-up before the cosine [updates]
 
     def __post_init__(self) -> None:
+        if self.lr_schedule not in LR_SCHEDULES:
+            raise ValueError(f"lr_schedule={self.lr_schedule!r}: valid schedules are {list(LR_SCHEDULES)}")
+        if self.warmup_steps < 0:
+            raise ValueError(f"warmup_steps={self.warmup_steps}: give 0 or more")
         if not 1 <= self.n_action_steps <= self.chunk_size:
             raise ValueError(f"n_action_steps={self.n_action_steps}: give 1 to chunk_size ({self.chunk_size})")
         if self.temporal_ensemble_coeff is not None and self.n_action_steps != 1:
@@ -57,10 +64,27 @@ class ActSettings:
         """The settings that change how a trained ACT acts but not what it learns."""
         return {"n_action_steps": self.n_action_steps, "temporal_ensemble_coeff": self.temporal_ensemble_coeff}
 
+    @property
+    def run_suffix(self) -> str:
+        """What sets a run trained under this schedule apart in folder names: ``-cos`` or nothing."""
+        return "" if self.lr_schedule == "constant" else "-cos"
+
     def args(self) -> list[str]:
+        """``lerobot-train``'s arguments for the policy, its optimizer and its learning-rate schedule."""
         text = {True: "true", False: "false", None: "null"}
-        return [f"--policy.{k}={text.get(v, v) if isinstance(v, (bool, type(None))) else v}"
-                for k, v in asdict(self).items()]
+        policy = {k: v for k, v in asdict(self).items() if k not in ("lr_schedule", "warmup_steps")}
+        args = [f"--policy.{k}={text.get(v, v) if isinstance(v, (bool, type(None))) else v}"
+                for k, v in policy.items()]
+        if self.lr_schedule == "cosine":
+            if self.optimizer_lr_backbone != self.optimizer_lr:
+                raise ValueError("lr_schedule='cosine' trains every parameter at optimizer_lr: "
+                                 f"give optimizer_lr_backbone={self.optimizer_lr} too")
+            # LeRobot's ACT preset has no schedule, so the optimizer is spelt out (ACT's own AdamW settings)
+            args += ["--use_policy_training_preset=false", "--optimizer.type=adamw",
+                     f"--optimizer.lr={self.optimizer_lr}", "--optimizer.weight_decay=0.0001",
+                     "--optimizer.grad_clip_norm=10", "--scheduler.type=cosine_annealing_with_warmup",
+                     f"--scheduler.num_warmup_steps={self.warmup_steps}"]
+        return args
 
 
 SMALL_ACT = ActSettings()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
@@ -131,6 +155,7 @@ class Recipe:
 
         for name in self.train_variants + self.eval_variants + (self.main_variant,):
             get_variant(name)  # ValueError naming the valid variants
+        self._check_fit()
         check_cameras(self.cameras)
         if any(w <= 0 for _, w in self.train_mix):
             raise ValueError(f"train_mix={self.train_mix}: give every variant a weight above 0")
@@ -154,6 +179,25 @@ class Recipe:
             raise ValueError(f"seeds={self.seeds}: give one or more distinct seeds, each 0 or more")
         if self.save_every < 0:
             raise ValueError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
+
+    def _check_fit(self) -> None:
+        """ValueError when the policy trained on ``train_mix`` could not run on an evaluation variant."""
+        from colorsort.variants import VARIANTS, get_variant
+
+        def shape(name: str) -> tuple[str, bool]:  # what sets the sizes of the state and the action
+            v = get_variant(name)
+            return v.robot, v.task_config.tracking
+
+        trained = {shape(v) for v in self.train_variants}
+        if len(trained) > 1:
+            raise ValueError(f"train_mix {list(self.train_variants)} mixes robots or belts (state sizes differ): "
+                             "train on variants of one robot and one belt")
+        (wanted,) = trained
+        bad = [v for v in self.eval_variants if shape(v) != wanted]
+        if bad:
+            fits = [v for v in VARIANTS if shape(v) == wanted]
+            raise ValueError(f"eval_variants {bad} do not fit a policy trained on {list(self.train_variants)} "
+                             f"(state sizes differ); variants it fits: {fits}")
 
     @property
     def train_variants(self) -> tuple[str, ...]:

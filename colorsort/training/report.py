@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from colorsort.benchmark.metrics import wilson_interval
@@ -78,7 +79,7 @@ def curve_table(points: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def _errorbars(ax, x: list[float], points: list[dict]) -> None:
+def _errorbars(ax, x: Sequence[float], points: list[dict]) -> None:
     rate = [100 * p["success_rate"] for p in points]
     lo = [100 * (p["success_rate"] - p["success_ci95"][0]) for p in points]
     hi = [100 * (p["success_ci95"][1] - p["success_rate"]) for p in points]

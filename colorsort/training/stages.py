@@ -4,7 +4,8 @@ Layout of the working folder ``out``::
 
     data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-late<L>: --late-pass L)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
-    train/demos-<N>-<S>steps-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its timing
+    train/demos-<N>-<S>steps[-cos]-seed<K>/  lerobot-train's run of S updates with seed K (-cos: cosine
+                              learning rate); <run>.json its timing
     eval/<run>-<exec>-<variant>.json  colorsort-eval's report of the run's last checkpoint, executing its
                               chunks as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
     curve/<run>-<exec>-<step>.json    colorsort-eval's report of an earlier checkpoint (the learning curve)
@@ -105,7 +106,7 @@ def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Pa
 
 def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
     """``lerobot-train``; the run folder and its timing ``{"started": unix time, "wall_s": s}`` (reused if there)."""
-    run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
+    run_dir = out / "train" / f"{data.name}-{steps}steps{recipe.act.run_suffix}-seed{seed}"
     timing_path = run_dir.with_suffix(".json")
     if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
         print(f"reusing {run_dir}")

@@ -1,0 +1,27 @@
+"""The expert for a cell: the stopping belt's or the tracking belt's, calibrated on the env it will drive."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from colorsort.expert.calibration import Calibration, sensor_source
+from colorsort.expert.config import ExpertConfig
+from colorsort.expert.sorter import SortingExpert
+from colorsort.expert.tracking import TrackingExpert
+
+if TYPE_CHECKING:
+    from colorsort.cell.env import ColorSort
+
+
+def make_expert(env: ColorSort, config: ExpertConfig = ExpertConfig()) -> SortingExpert:
+    """A ``SortingExpert`` on a stopping belt, a ``TrackingExpert`` on a tracking one, calibrated on ``env``.
+
+    ``env`` must have an off-screen renderer: the expert sees boxes through the sensor camera.
+    Use: ``expert = make_expert(env)``, ``expert.reset(obs)`` after ``env.reset()``, then
+    ``action = expert.act(obs)`` every step.
+    """
+    if not env.has_offscreen_renderer:
+        raise ValueError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
+    size, image = sensor_source(env, config.sensor_image_size)
+    cls = TrackingExpert if env.config.tracking else SortingExpert
+    return cls(Calibration.from_env(env, size), image, config)
