@@ -25,6 +25,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 from colorsort.cli.args import parse_image_size  # noqa
 from colorsort.data.collect import CollectSummary, collect  # noqa
 from colorsort.data.config import CollectConfig  # noqa: E402
+from colorsort.results import recorded
 
 
 def run(config: CollectConfig) -> CollectSummary:
@@ -75,4 +76,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

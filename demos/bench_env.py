@@ -20,6 +20,7 @@ import robosuite as suite
 
 import colorsort  # noqa: F401
 from colorsort.cell.cameras import CAMERAS, WRIST_CAMERA_MJCF
+from colorsort.results import recorded
 
 
 def timed(fn, seconds: float) -> float:
@@ -66,4 +67,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

@@ -23,6 +23,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
 from colorsort.benchmark.evaluate import evaluate, observation_settings  # noqa: E402
 from colorsort.logs import quiet_robosuite_info  # noqa: E402
+from colorsort.results import recorded
 
 
 def bench(policy: str, variant: str, episodes: int, repeats: int, image_size: int | None) -> None:
@@ -62,4 +63,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

@@ -26,6 +26,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
 from colorsort.benchmark.evaluate import evaluate, observation_settings  # noqa: E402
 from colorsort.logs import quiet_robosuite_info  # noqa: E402
+from colorsort.results import recorded
 
 
 def inference_settings(execution: str) -> dict[str, float | int | None]:
@@ -73,4 +74,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

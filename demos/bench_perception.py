@@ -21,6 +21,7 @@ from colorsort.cell.env import ColorSort
 from colorsort.cell.lighting import CONDITIONS
 from colorsort.expert.perception import UNKNOWN, ColorSensor
 from colorsort.expert.sensor_views import ViewSampler, wrap_quarter_turn
+from colorsort.results import recorded
 
 COLORS = ("red", "green", "blue", "yellow", "purple")
 CASES = ([(name, name, "single") for name in CONDITIONS]
@@ -74,4 +75,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

@@ -37,6 +37,7 @@ from colorsort.data.config import CollectConfig  # noqa: E402
 from colorsort.data.shards import merge_in_child  # noqa: E402
 from colorsort.executors.base import ExecutorConfig  # noqa: E402
 from colorsort.logs import quiet_robosuite_info  # noqa: E402
+from colorsort.results import recorded
 
 SETUPS = (("local", 1), ("local", 2), ("ray", 1), ("ray", 2))
 
@@ -150,4 +151,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

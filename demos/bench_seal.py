@@ -26,6 +26,7 @@ from colorsort.expert.calibration import Calibration  # noqa: E402
 from colorsort.expert.config import ExpertConfig  # noqa: E402
 from colorsort.expert.planning import CupIK, Waypoint, site_yaw  # noqa: E402
 from colorsort.expert.tracking import DensePath, smoothstep, track_heights  # noqa: E402
+from colorsort.results import recorded
 
 
 def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
@@ -83,4 +84,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

@@ -20,6 +20,7 @@ from multiprocessing import get_context
 import numpy as np
 
 from colorsort.config import PRESETS
+from colorsort.results import recorded
 from colorsort.robots import ROBOTS
 
 
@@ -63,4 +64,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

@@ -19,6 +19,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
 from colorsort.benchmark.evaluate import evaluate  # noqa: E402
 from colorsort.benchmark.metrics import EvalReport  # noqa: E402
+from colorsort.results import recorded
 from colorsort.variants import VARIANTS  # noqa: E402
 
 
@@ -55,4 +56,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

@@ -24,6 +24,7 @@ from multiprocessing import get_context
 import numpy as np
 
 from colorsort.config import PRESETS
+from colorsort.results import recorded
 from colorsort.robots import ROBOTS
 
 PRESETS_COMPARED = ("default", "tracking", "tracking-fast")
@@ -94,4 +95,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded(__file__):
+        main()

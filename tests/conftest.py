@@ -1,34 +1,43 @@
-"""Shared fixtures: headless rendering, offline hub, small fast envs."""
+"""Shared fixtures: headless rendering, offline hub, envs that are closed whatever the test's outcome."""
 
 import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
+os.environ.setdefault("COLORSORT_RESULTS", "none")  # benchmark scripts a test runs write no docs/results file
 
 import pytest  # noqa: E402
-import robosuite as suite  # noqa: E402
+from helpers import TINY, new_env  # noqa: E402
 
 import colorsort  # noqa: E402,F401  (registers the task)
 
 
-def make_env(robot: str = "IRB140", **kwargs):
-    """A ColorSort env without cameras unless asked for; episodes never end on their own."""
-    kwargs.setdefault("has_offscreen_renderer", False)
-    kwargs.setdefault("use_camera_obs", False)
-    kwargs.setdefault("ignore_done", True)
-    kwargs.setdefault("seed", 0)
-    return suite.make("ColorSort", robots=robot, **kwargs)
+@pytest.fixture
+def closing():
+    """``closing(thing)`` returns ``thing`` and closes it after the test, whether the test passed or not."""
+    things = []
+
+    def register(thing):
+        things.append(thing)
+        return thing
+
+    yield register
+    for thing in reversed(things):
+        thing.close()
+
+
+@pytest.fixture
+def make_env(closing):
+    """``make_env(robot, **kwargs)``: ``helpers.new_env``, closed after the test."""
+    return lambda robot="IRB140", **kwargs: closing(new_env(robot, **kwargs))
 
 
 @pytest.fixture
 def env():
-    e = make_env()
+    e = new_env()
     e.reset()
     yield e
     e.close()
-
-
-TINY = dict(episodes=2, image_size=(64, 64), cameras=("scene", "wrist"))  # two one-box episodes
 
 
 @pytest.fixture(scope="session")

@@ -1,15 +1,29 @@
-"""Test helpers: a small damped-least-squares IK and motion driver for the arm.
+"""Test helpers: small envs, and a small damped-least-squares IK and motion driver for the arm.
 
 The expert's planner (mink + ruckig) is the product's IK; these helpers only put the cup where
-a physics test needs it, with as little machinery as possible.
+a physics test needs it, with as little machinery as possible. In a test, take envs from the
+``make_env`` fixture (``conftest.py``), which closes them; ``new_env`` is for module fixtures.
 """
 
 from __future__ import annotations
 
 import mujoco
 import numpy as np
+import robosuite as suite
 
 from colorsort.cell.env import ColorSort
+
+TINY = dict(episodes=2, image_size=(64, 64), cameras=("scene", "wrist"))  # two one-box episodes
+
+
+def new_env(robot: str = "IRB140", **kwargs) -> ColorSort:
+    """A ColorSort env without cameras unless asked for; episodes never end on their own. The caller closes it."""
+    kwargs.setdefault("has_offscreen_renderer", False)
+    kwargs.setdefault("use_camera_obs", False)
+    kwargs.setdefault("ignore_done", True)
+    kwargs.setdefault("seed", 0)
+    return suite.make("ColorSort", robots=robot, **kwargs)
+
 
 CUP_DOWN = np.array([0.0, 0.0, -1.0])  # world direction of the cup's approach axis when picking
 

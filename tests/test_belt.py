@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-from conftest import make_env
 from helpers import wait_for_box_at_sensor
 
 
@@ -11,7 +10,7 @@ def hold_action(env):
 
 
 @pytest.mark.parametrize("speed", [0.05, 0.2])
-def test_belt_carries_box_at_its_speed_without_spinning(speed):
+def test_belt_carries_box_at_its_speed_without_spinning(speed, make_env):
     env = make_env(belt_speed=speed, spawn_period=100.0)
     env.reset()
     (box,) = env.boxes_in_play()
@@ -27,7 +26,6 @@ def test_belt_carries_box_at_its_speed_without_spinning(speed):
     assert abs(v[1]) < 1e-3 and abs(v[2]) < 1e-3
     quat1 = env.sim.data.body_xquat[env.plant.pool.body[box.index]]
     assert abs(abs(quat0 @ quat1) - 1.0) < 1e-4  # no rotation
-    env.close()
 
 
 def test_belt_stops_when_ray_blocked_and_restarts_when_clear(env):
@@ -53,7 +51,7 @@ def test_belt_stops_when_ray_blocked_and_restarts_when_clear(env):
     assert followers and all(a < b - 0.05 for a, b in zip(after, before, strict=True))  # the queue moves on
 
 
-def test_box_riding_past_the_end_is_dropped():
+def test_box_riding_past_the_end_is_dropped(make_env):
     env = make_env(spawn_period=100.0)
     env.reset()
     (box,) = env.boxes_in_play()
@@ -67,10 +65,9 @@ def test_box_riding_past_the_end_is_dropped():
         dropped += r < 0
     assert info["dropped"] == 1 and dropped == 1
     assert box not in env.boxes_in_play()
-    env.close()
 
 
-def test_spawner_waits_when_the_pool_is_empty():
+def test_spawner_waits_when_the_pool_is_empty(make_env):
     env = make_env(pool_size=2, bin_capacity=1, spawn_period=0.5)
     env.reset()
     for _ in range(int(8 / env.control_timestep)):  # 8 s: 16 boxes due, 2 in the pool
@@ -80,10 +77,9 @@ def test_spawner_waits_when_the_pool_is_empty():
     for _ in range(int(1 / env.control_timestep)):
         _, _, _, info = env.step(hold_action(env))
     assert info["spawned"] == 3
-    env.close()
 
 
-def test_belt_pass_lets_a_box_without_a_bin_through_as_rejected():
+def test_belt_pass_lets_a_box_without_a_bin_through_as_rejected(make_env):
     env = make_env(box_colors=("yellow",), spawn_period=100.0)
     env.reset()
     box = wait_for_box_at_sensor(env)
@@ -100,4 +96,3 @@ def test_belt_pass_lets_a_box_without_a_bin_through_as_rejected():
             break
     assert rejected == 1 and info["dropped"] == 0 and reward == 0.0
     assert box not in env.boxes_in_play()
-    env.close()

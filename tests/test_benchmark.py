@@ -18,12 +18,11 @@ SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
 
 
 @pytest.mark.parametrize("gym_id", [DEFAULT_GYM_ID] + [v.gym_id for v in VARIANTS.values()])
-def test_every_registered_id_passes_gymnasiums_env_checker(gym_id):
-    env = gym.make(gym_id, **SMALL)
+def test_every_registered_id_passes_gymnasiums_env_checker(gym_id, closing):
+    env = closing(gym.make(gym_id, **SMALL))
     check_env(env.unwrapped, skip_render_check=False)
     obs, info = env.reset(seed=0)
     assert set(obs) == {"pixels", "agent_pos", "environment_state"} and "is_success" in info
-    env.close()
 
 
 def test_list_prints_one_variant_per_line(capsys):

@@ -3,7 +3,6 @@
 import logging
 
 import numpy as np
-from conftest import make_env
 
 from colorsort.config import BIN_COLORS
 
@@ -32,7 +31,7 @@ def the_box(env, color: str):
     return box
 
 
-def test_box_dropped_into_green_bin_is_counted_there():
+def test_box_dropped_into_green_bin_is_counted_there(make_env):
     env = make_env(spawn_period=100.0)
     env.reset()
     box = the_box(env, "green")
@@ -44,7 +43,7 @@ def test_box_dropped_into_green_bin_is_counted_there():
     assert reward == 1.0 and info["misplaced"] == 0 and info["dropped"] == 0
 
 
-def test_box_in_wrong_bin_is_misplaced():
+def test_box_in_wrong_bin_is_misplaced(make_env):
     env = make_env(spawn_period=100.0)
     env.reset()
     box = the_box(env, "red")
@@ -54,7 +53,7 @@ def test_box_in_wrong_bin_is_misplaced():
     assert reward == -1.0
 
 
-def test_box_on_floor_is_dropped():
+def test_box_on_floor_is_dropped(make_env):
     env = make_env(spawn_period=100.0)
     env.reset()
     box = the_box(env, "red")
@@ -65,7 +64,7 @@ def test_box_on_floor_is_dropped():
     assert info["dropped"] == 1 and reward == -1.0
 
 
-def test_full_bin_is_emptied_and_logged(caplog):
+def test_full_bin_is_emptied_and_logged(caplog, make_env):
     env = make_env(spawn_period=0.5, bin_capacity=2)
     env.reset()
     with caplog.at_level(logging.INFO, logger="colorsort"):
@@ -82,7 +81,7 @@ def test_full_bin_is_emptied_and_logged(caplog):
     assert all(z < -1.0 for z in parked_z)
 
 
-def test_capacity_one_empties_every_box():
+def test_capacity_one_empties_every_box(make_env):
     env = make_env(spawn_period=100.0, bin_capacity=1)
     env.reset()
     box = the_box(env, "red")

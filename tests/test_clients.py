@@ -13,7 +13,6 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import robosuite as suite
-from conftest import make_env
 from test_bins import drop_into_bin, run, the_box
 from test_expert import make_expert_env, run_until
 
@@ -81,58 +80,52 @@ def test_a_fork_after_rendering_fails_at_once_with_advice_instead_of_hanging():
     assert "refused:" in done.stdout and "forkserver" in done.stdout
 
 
-def test_the_gym_env_builds_no_simulation_until_it_is_used():
-    env = gym.make(DEFAULT_GYM_ID, **SMALL)
+def test_the_gym_env_builds_no_simulation_until_it_is_used(closing):
+    env = closing(gym.make(DEFAULT_GYM_ID, **SMALL))
     assert env.unwrapped._env is None  # what a vector env's parent builds: spaces only
     obs, _ = env.reset(seed=0)
     assert env.observation_space.contains(obs)
-    env.close()
 
 
 @pytest.mark.parametrize("robot", ["IRB140", "Panda", "UR5e"])
-def test_action_bounds_without_an_env_match_the_envs_action_spec(robot):
+def test_action_bounds_without_an_env_match_the_envs_action_spec(robot, make_env):
     env = make_env(robot)
     low, high = ROBOTS[robot].action_bounds()
     assert np.array_equal(low, env.action_spec[0]) and np.array_equal(high, env.action_spec[1])
-    env.close()
 
 
-def test_gym_env_reports_its_step_limit_as_lerobot_reads_it():
-    env = gym.make(DEFAULT_GYM_ID, **SMALL)
+def test_gym_env_reports_its_step_limit_as_lerobot_reads_it(closing):
+    env = closing(gym.make(DEFAULT_GYM_ID, **SMALL))
     assert env.get_wrapper_attr("_max_episode_steps") == int(np.ceil(VARIANTS["default"].time_limit * 20))
-    short = gym.make(DEFAULT_GYM_ID, episode_length=3, **SMALL)
+    short = closing(gym.make(DEFAULT_GYM_ID, episode_length=3, **SMALL))
     short.reset(seed=0)
     ends = [short.step(short.action_space.low * 0)[3] for _ in range(3)]
     assert ends == [False, False, True] and short.get_wrapper_attr("_max_episode_steps") == 3
-    env.close()
-    short.close()
 
 
 # ---------------------------------------------------------------------- robosuite's wrappers
-def test_robosuites_gym_wrapper_steps_colorsort():
+def test_robosuites_gym_wrapper_steps_colorsort(make_env, closing):
     from robosuite.wrappers import GymWrapper
 
-    env = GymWrapper(make_env(use_object_obs=True))
+    env = closing(GymWrapper(make_env(use_object_obs=True)))
     obs, _ = env.reset(seed=0)
     assert obs.shape == env.observation_space.shape and np.isfinite(obs).all()
     assert env.reward_range == (0, 1.0)
     obs, reward, terminated, truncated, info = env.step(np.zeros(env.action_space.shape))
     assert np.isfinite(obs).all() and reward == 0.0 and "is_success" in info
-    env.close()
 
 
-def test_robosuites_visualization_wrapper_shows_the_grip_site():
+def test_robosuites_visualization_wrapper_shows_the_grip_site(make_env, closing):
     from robosuite.wrappers import VisualizationWrapper
 
-    env = VisualizationWrapper(make_env(has_offscreen_renderer=True))
+    env = closing(VisualizationWrapper(make_env(has_offscreen_renderer=True)))
     site = env.sim.model.site_name2id("gripper0_right_grip_site_cylinder")
     env.reset()
     assert env.sim.model.site_rgba[site][3] > 0  # the wrapper's point: visualisation on
     env.step(np.zeros(8))
-    env.close()
 
 
-def test_robosuites_data_collection_wrapper_records_states_and_actions(tmp_path):
+def test_robosuites_data_collection_wrapper_records_states_and_actions(tmp_path, make_env):
     from robosuite.wrappers import DataCollectionWrapper
 
     env = DataCollectionWrapper(make_env(), str(tmp_path))
@@ -145,34 +138,32 @@ def test_robosuites_data_collection_wrapper_records_states_and_actions(tmp_path)
     assert data["states"].shape[0] == 1 + 5 and len(data["action_infos"]) == 5  # the initial state, then per step
 
 
-def test_robosuites_domain_randomization_wrapper_keeps_box_colours():
+def test_robosuites_domain_randomization_wrapper_keeps_box_colours(make_env, closing):
     from robosuite.wrappers import DomainRandomizationWrapper
 
     from colorsort.config import COLORS
 
     base = make_env(has_offscreen_renderer=True, use_camera_obs=True, camera_names=["scene"], camera_heights=32,
                     camera_widths=32)
-    env = DomainRandomizationWrapper(base, randomize_color=False, randomize_every_n_steps=1)
+    env = closing(DomainRandomizationWrapper(base, randomize_color=False, randomize_every_n_steps=1))
     env.reset()
     for _ in range(3):
         obs, _, _, _ = env.step(np.zeros(8))
     assert obs["scene_image"].shape == (32, 32, 3)
     for box in base.boxes_in_play():
         assert np.allclose(base.sim.model.geom_rgba[base.plant.pool.geom[box.index]], COLORS[box.color])
-    env.close()
 
 
-def test_no_visualisation_sites_show_before_the_first_reset():
+def test_no_visualisation_sites_show_before_the_first_reset(make_env):
     """A replay renders stored states without reset(): robosuite's green grip line must not show."""
     env = make_env(has_offscreen_renderer=True)  # never reset
     m = env.sim.model
     sites = [i for i in range(m.nsite) if "grip_site" in (m.site_id2name(i) or "")]
     assert sites and all(m.site_rgba[i][3] <= 0 for i in sites)
-    env.close()
 
 
 # ---------------------------------------------------------------------- reward conventions
-def test_reward_scale_scales_every_reward():
+def test_reward_scale_scales_every_reward(make_env):
     totals = {}
     for scale in (1.0, 2.5):
         env = make_env(spawn_period=100.0, reward_scale=scale)
@@ -183,8 +174,8 @@ def test_reward_scale_scales_every_reward():
     assert totals[1.0] == 1.0 and totals[2.5] == 2.5
 
 
-def test_shaped_reward_rises_through_the_stages_of_an_expert_episode():
-    env, expert, obs = make_expert_env(reward_shaping=True, boxes_to_sort=2)
+def test_shaped_reward_rises_through_the_stages_of_an_expert_episode(make_env):
+    env, expert, obs = make_expert_env(make_env, reward_shaping=True, boxes_to_sort=2)
     trace = []
     run_until(env, expert, obs, boxes=1, max_time=15.0,
               on_step=lambda a, o, info: trace.append((env.staged_rewards(), env.reward())))
@@ -198,21 +189,19 @@ def test_shaped_reward_rises_through_the_stages_of_an_expert_episode():
     # per step: (placed + progress) / boxes_to_sort, plus +1 in the step the box lands
     assert rewards[-1] >= 1.0 + 0.5  # the landing step: +1, and 1 of 2 boxes counted
     assert min(rewards[first["seal"] : -1]) >= 0.25 and rewards[0] < 0.125
-    env.close()
 
 
-def test_sparse_reward_is_the_default_and_zero_between_events():
+def test_sparse_reward_is_the_default_and_zero_between_events(make_env):
     env = make_env()
     env.reset()
     assert not env.reward_shaping and env.reward_scale == 1.0
     rewards = [env.step(np.append(env.robots[0].init_qpos, [-1.0, -1.0]))[1] for _ in range(5)]
     assert rewards == [0.0] * 5
-    env.close()
 
 
 # ---------------------------------------------------------------------- bad actions
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
-def test_non_finite_actions_raise_and_leave_the_state_untouched(bad):
+def test_non_finite_actions_raise_and_leave_the_state_untouched(bad, make_env):
     env = make_env()
     env.reset()
     before = env.get_sim_state()
@@ -221,20 +210,18 @@ def test_non_finite_actions_raise_and_leave_the_state_untouched(bad):
     with pytest.raises(ValueError, match=r"joint_2.target \(index 1\).*suction \(index 6\)"):
         env.step(action)
     assert np.array_equal(env.get_sim_state(), before)
-    env.close()
 
 
-def test_nan_actions_raise_through_the_gym_env():
-    env = ColorSortGymEnv("default", **SMALL)
+def test_nan_actions_raise_through_the_gym_env(closing):
+    env = closing(ColorSortGymEnv("default", **SMALL))
     env.reset(seed=0)
     action = env.action_space.low * 0
     action[-1] = np.nan
     with pytest.raises(ValueError, match="belt_pass"):
         env.step(action)
-    env.close()
 
 
-def test_targets_beyond_a_joints_limit_stop_at_the_limit():
+def test_targets_beyond_a_joints_limit_stop_at_the_limit(make_env):
     """Documented: targets are clipped to the controller's [-7, 7] rad; the joint's own limit stops the arm."""
     env = make_env()
     env.reset()
@@ -247,16 +234,14 @@ def test_targets_beyond_a_joints_limit_stop_at_the_limit():
         env.step(action)
     q = env.sim.data.qpos[m.get_joint_qpos_addr(joint)]
     assert hi - 0.05 < q <= hi + 0.01 and np.isfinite(env.get_sim_state()).all()
-    env.close()
 
 
-def test_suite_make_takes_robosuites_reward_arguments():
-    env = suite.make("ColorSort", robots="IRB140", reward_scale=None, reward_shaping=True, has_offscreen_renderer=False,
-                     use_camera_obs=False)
+def test_suite_make_takes_robosuites_reward_arguments(closing):
+    env = closing(suite.make("ColorSort", robots="IRB140", reward_scale=None, reward_shaping=True,
+                             has_offscreen_renderer=False, use_camera_obs=False))
     env.reset()
     assert env.reward_scale is None and env.reward_shaping
     assert 0.0 <= env.reward() < 0.5
-    env.close()
 
 
 # ---------------------------------------------------------------------- console output
@@ -274,11 +259,10 @@ def test_console_scripts_print_no_robosuite_notices():
     assert "robosuite" not in done.stdout + done.stderr
 
 
-def test_a_state_only_gym_env_has_no_pixels_and_passes_the_env_checker():
+def test_a_state_only_gym_env_has_no_pixels_and_passes_the_env_checker(closing):
     from gymnasium.utils.env_checker import check_env
 
-    env = gym.make(DEFAULT_GYM_ID, cameras=(), render_mode=None)
+    env = closing(gym.make(DEFAULT_GYM_ID, cameras=(), render_mode=None))
     check_env(env.unwrapped)
     obs, _ = env.reset(seed=0)
     assert set(obs) == {"agent_pos", "environment_state"} and not env.unwrapped.env.has_offscreen_renderer
-    env.close()

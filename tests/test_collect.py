@@ -6,7 +6,7 @@ import shutil
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
-from conftest import TINY
+from helpers import TINY
 
 from colorsort.cli.args import parse_image_size
 from colorsort.cli.collect import main

@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import TINY
+from helpers import TINY
 
 from colorsort.config import COLORS
 from colorsort.data.schema import ACTION, ENV_STATE, SIM_STATE, STATE, image_key

@@ -102,3 +102,28 @@ def test_readmes_expert_command_runs_as_written(tmp_path):
     wanted = int(argv[argv.index("--boxes") + 1])
     assert report["correct"] == len(report["boxes"]) == wanted, report
     assert report["misplaced"] == report["dropped"] == 0 and all(b["bin"] == b["true_color"] for b in report["boxes"])
+
+
+def test_a_benchmark_script_writes_what_it_printed_with_its_command_machine_and_date(tmp_path, monkeypatch, capsys):
+    from colorsort.results import recorded
+
+    monkeypatch.setenv("COLORSORT_RESULTS", str(tmp_path))
+    with recorded("demos/bench_example.py", ["--seeds", "3"]):
+        print("measure   value\nsteps/s   1,234")
+    (page,) = tmp_path.iterdir()
+    assert page.name == "bench_example_seeds-3.md"
+    text = page.read_text()
+    assert text.startswith("# `python demos/bench_example.py --seeds 3`\n")
+    assert "cores" in text and " UTC " in text and "steps/s   1,234\n```" in text
+    assert "steps/s   1,234" in capsys.readouterr().out  # printed as usual too
+    monkeypatch.setenv("COLORSORT_RESULTS", "none")
+    with recorded("demos/bench_example.py", []):
+        print("nothing kept")
+    assert len(list(tmp_path.iterdir())) == 1
+
+
+def test_every_results_file_the_docs_link_exists_and_every_results_file_is_linked():
+    results = REPO / "docs" / "results"
+    docs = "\n".join(p.read_text() for p in [README, *(REPO / "docs").glob("*.md")])
+    for page in sorted(results.glob("*.md")) if results.is_dir() else []:
+        assert f"results/{page.name}" in docs, f"docs/results/{page.name} is linked from no page"

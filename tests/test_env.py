@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 import robosuite as suite
-from conftest import make_env
 
 from colorsort.config import PRESETS, TaskConfig, make_config
 from colorsort.robots import ROBOTS
@@ -30,7 +29,7 @@ def test_invalid_configuration_raises_naming_valid_choices(kwargs, message):
         suite.make("ColorSort", has_offscreen_renderer=False, **kwargs)
 
 
-def test_presets_and_overrides():
+def test_presets_and_overrides(make_env):
     seed = make_config("seed")
     assert (seed.belt_speed, seed.spawn_period, seed.bin_capacity) == (0.05, 30.0, 2)
     assert make_config("seed", belt_speed=0.08).belt_speed == 0.08
@@ -39,10 +38,9 @@ def test_presets_and_overrides():
         TaskConfig(box_colors="red")
     env = make_env(preset="seed", bin_capacity=3)
     assert env.config.belt_speed == 0.05 and env.config.bin_capacity == 3
-    env.close()
 
 
-def rollout(seed: int, steps: int = 60):
+def rollout(make_env, seed: int, steps: int = 60):
     env = make_env(seed=seed, spawn_period=0.5, lateral_jitter=0.03, yaw_jitter=20.0)
     env.reset()
     actions = np.random.default_rng(123).uniform(-0.2, 0.2, (steps, 8)) + np.r_[env.robots[0].init_qpos, 0, -1]
@@ -50,14 +48,13 @@ def rollout(seed: int, steps: int = 60):
         env.step(a)
     state = env.sim.get_state().flatten()
     colors = [b.color for b in env.boxes if b.status.value != "parked"]
-    env.close()
     return state, colors
 
 
-def test_same_seed_same_state_different_seed_different_boxes():
-    s0, c0 = rollout(0)
-    s0b, c0b = rollout(0)
-    s1, c1 = rollout(1)
+def test_same_seed_same_state_different_seed_different_boxes(make_env):
+    s0, c0 = rollout(make_env, 0)
+    s0b, c0b = rollout(make_env, 0)
+    s1, c1 = rollout(make_env, 1)
     assert np.array_equal(s0, s0b) and c0 == c0b
     assert len(c0) >= 4
     assert c0 != c1 or not np.array_equal(s0, s1)
@@ -65,7 +62,7 @@ def test_same_seed_same_state_different_seed_different_boxes():
 
 @pytest.mark.parametrize("robot", ROBOTS)
 @pytest.mark.parametrize("preset", sorted(PRESETS))
-def test_random_actions_for_1s_no_warnings_no_nan(robot, preset):
+def test_random_actions_for_1s_no_warnings_no_nan(robot, preset, make_env):
     env = make_env(robot, preset=preset, spawn_period=0.5, lateral_jitter=0.05, yaw_jitter=45.0)
     env.reset()
     low, high = env.action_spec
@@ -76,11 +73,10 @@ def test_random_actions_for_1s_no_warnings_no_nan(robot, preset):
     assert all(w.number == 0 for w in d.warning), [(i, w.number) for i, w in enumerate(d.warning) if w.number]
     assert np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))
     assert np.all(np.isfinite(obs["robot0_proprio-state"]))
-    env.close()
 
 
 @pytest.mark.parametrize("robot", ["Panda", "UR5e"])
-def test_other_robots_run_the_cell(robot):
+def test_other_robots_run_the_cell(robot, make_env):
     env = make_env(robot)
     env.reset()
     hold = np.concatenate([env.robots[0].init_qpos, [-1.0, -1.0]])
@@ -88,10 +84,9 @@ def test_other_robots_run_the_cell(robot):
         _, _, _, info = env.step(hold)
     assert info["box_detected"] and not info["belt_running"]
     assert info["spawned"] >= 2
-    env.close()
 
 
-def test_info_keys_and_success():
+def test_info_keys_and_success(make_env):
     env = make_env(boxes_to_sort=1, spawn_period=100.0, ignore_done=False)
     env.reset()
     (box,) = env.boxes_in_play()
@@ -109,10 +104,9 @@ def test_info_keys_and_success():
         if done:
             break
     assert done and info["is_success"] and reward == 1.0
-    env.close()
 
 
-def test_camera_images_right_side_up():
+def test_camera_images_right_side_up(make_env):
     env = make_env(has_offscreen_renderer=True, use_camera_obs=True, camera_heights=96, camera_widths=128)
     obs = env.reset()
     for cam in ("scene", "sensor", "wrist"):
@@ -126,4 +120,3 @@ def test_camera_images_right_side_up():
     # The scene camera: sky (bright, bluish-grey) above, floor (grey) below, never the other way.
     scene = obs["scene_image"].astype(int)
     assert scene[:5].mean() > scene[-5:].mean()
-    env.close()

@@ -4,14 +4,13 @@ import json
 
 import numpy as np
 import pytest
-from conftest import make_env
 
 from colorsort.cli.sort import main as sort_main
 from colorsort.expert.factory import make_expert
 from colorsort.expert.sorter import Phase
 
 
-def make_expert_env(robot="IRB140", **kwargs):
+def make_expert_env(make_env, robot="IRB140", **kwargs):
     env = make_env(robot, has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor"], **kwargs)
     obs = env.reset()
     expert = make_expert(env)
@@ -35,31 +34,28 @@ def assert_all_in_their_bins(env, boxes):
     assert env.tally.misplaced == 0 and env.tally.dropped == 0
 
 
-def test_sorts_three_boxes_into_the_right_bins():
-    env, expert, obs = make_expert_env()
+def test_sorts_three_boxes_into_the_right_bins(make_env):
+    env, expert, obs = make_expert_env(make_env)
     run_until(env, expert, obs, boxes=3, max_time=25.0)
     assert_all_in_their_bins(env, 3)
     assert [c.seen_color for c in expert.cycles[:3]] == [e.color for e in env.events[:3]]
-    env.close()
 
 
-def test_picks_off_centre_turned_boxes():
-    env, expert, obs = make_expert_env(lateral_jitter=0.05, yaw_jitter=45.0, seed=4)
+def test_picks_off_centre_turned_boxes(make_env):
+    env, expert, obs = make_expert_env(make_env, lateral_jitter=0.05, yaw_jitter=45.0, seed=4)
     run_until(env, expert, obs, boxes=3, max_time=25.0)
     assert_all_in_their_bins(env, 3)
-    env.close()
 
 
 @pytest.mark.parametrize("robot", ["Panda", "UR5e"])
-def test_sorts_with_robosuite_arms(robot):
-    env, expert, obs = make_expert_env(robot)
+def test_sorts_with_robosuite_arms(robot, make_env):
+    env, expert, obs = make_expert_env(make_env, robot)
     run_until(env, expert, obs, boxes=2, max_time=20.0)
     assert_all_in_their_bins(env, 2)
-    env.close()
 
 
-def test_does_not_pick_while_the_belt_runs_with_no_box_at_the_sensor():
-    env, expert, obs = make_expert_env(spawn_period=100.0)
+def test_does_not_pick_while_the_belt_runs_with_no_box_at_the_sensor(make_env):
+    env, expert, obs = make_expert_env(make_env, spawn_period=100.0)
     seen = []
 
     def check(action, obs, info):
@@ -72,33 +68,29 @@ def test_does_not_pick_while_the_belt_runs_with_no_box_at_the_sensor():
     run_until(env, expert, obs, boxes=1, max_time=12.0, on_step=check)
     assert any(seen) and not all(seen)
     assert_all_in_their_bins(env, 1)
-    env.close()
 
 
-def test_lets_boxes_without_a_bin_ride_past_as_rejected():
-    env, expert, obs = make_expert_env(box_colors=("yellow", "purple"), spawn_period=3.0)
+def test_lets_boxes_without_a_bin_ride_past_as_rejected(make_env):
+    env, expert, obs = make_expert_env(make_env, box_colors=("yellow", "purple"), spawn_period=3.0)
     suction = []
     run_until(env, expert, obs, boxes=2, max_time=20.0, on_step=lambda a, o, i: suction.append(a[-2] > 0))
     assert env.tally.rejected == 2 and env.tally.dropped == 0 and not any(suction)
     assert [c.seen_color for c in expert.cycles[:2]] == ["unknown", "unknown"]
-    env.close()
 
 
-def test_seed_preset_sorts_at_the_original_rhythm():
-    env, expert, obs = make_expert_env(preset="seed")
+def test_seed_preset_sorts_at_the_original_rhythm(make_env):
+    env, expert, obs = make_expert_env(make_env, preset="seed")
     run_until(env, expert, obs, boxes=1, max_time=30.0)
     assert_all_in_their_bins(env, 1)
     # 0.82 m of belt at 0.05 m/s: the first box reaches the sensor after about 16 s.
     assert 15.0 < expert.cycles[0].detected_at < 18.0
-    env.close()
 
 
-def test_expert_needs_the_sensor_camera():
+def test_expert_needs_the_sensor_camera(make_env):
     env = make_env()
     env.reset()
     with pytest.raises(ValueError, match="sensor camera"):
         make_expert(env)
-    env.close()
 
 
 def test_sort_cli_writes_the_summary(tmp_path, capsys):
@@ -132,12 +124,11 @@ def test_expert_config_refuses_values_out_of_range_naming_them(kwargs, name):
         ExpertConfig(**kwargs)
 
 
-def test_the_expert_is_built_from_a_calibration_not_the_env():
+def test_the_expert_is_built_from_a_calibration_not_the_env(make_env):
     from colorsort.expert.calibration import Calibration
 
-    env, expert, _ = make_expert_env()
+    env, expert, _ = make_expert_env(make_env)
     cal = expert.calibration
     assert isinstance(cal, Calibration) and not hasattr(expert, "env")
     assert np.array_equal(cal.home, env.robot_spec.home) and cal.control_period == env.control_timestep
     assert cal.camera.width == 128 and cal.kinematics.nq == len(env.robot_spec.home)
-    env.close()

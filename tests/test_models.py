@@ -3,7 +3,6 @@
 import mujoco
 import numpy as np
 import pytest
-from conftest import make_env
 from helpers import arm_joint_ids
 
 from colorsort.cell.models.irb140 import HOME_QPOS, JOINT_LIMITS_DEG, dh_forward_kinematics
@@ -70,7 +69,7 @@ def test_home_pose_holds_still_under_gravity(env):
 
 
 @pytest.mark.parametrize("robot", ["Panda", "UR5e"])
-def test_suction_gripper_mounts_on_robosuite_arms(robot):
+def test_suction_gripper_mounts_on_robosuite_arms(robot, make_env):
     env = make_env(robot)
     obs = env.reset()
     assert env.action_dim == (9 if robot == "Panda" else 8)  # joints + suction + belt pass
@@ -79,7 +78,6 @@ def test_suction_gripper_mounts_on_robosuite_arms(robot):
     for _ in range(20):
         obs, _, _, info = env.step(np.concatenate([q, [1.0, -1.0]]))
     assert np.abs(obs["robot0_joint_pos"] - q).max() < 0.01
-    env.close()
 
 
 @pytest.mark.parametrize("xml", [("irb140", "robot.xml"), ("suction_gripper", "suction_gripper.xml")])

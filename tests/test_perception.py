@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import make_env
+from helpers import new_env
 
 from colorsort.cell.lighting import CONDITIONS, LightRig
 from colorsort.config import Lighting
@@ -12,7 +12,7 @@ from colorsort.expert.sensor_views import ViewSampler, wrap_quarter_turn
 
 @pytest.fixture(scope="module")
 def sampler():
-    env = make_env(has_offscreen_renderer=True, camera_names=["sensor"])
+    env = new_env(has_offscreen_renderer=True, camera_names=["sensor"])
     env.reset()
     yield ViewSampler(env, 128, 128)
     env.close()

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import make_env
+from helpers import new_env
 
 from colorsort.expert.planning import (
     ANGLE_TOLERANCE,
@@ -19,10 +19,11 @@ from colorsort.robots import ROBOTS
 
 
 def make_ik(robot: str) -> CupIK:
-    env = make_env(robot)
-    ik = CupIK(env.robots[0].robot_model.get_model(mode="mujoco"), np.array(ROBOTS[robot].home))
-    env.close()
-    return ik
+    env = new_env(robot)
+    try:
+        return CupIK(env.robots[0].robot_model.get_model(mode="mujoco"), np.array(ROBOTS[robot].home))
+    finally:
+        env.close()
 
 
 @pytest.mark.parametrize("robot", ["IRB140", "Panda", "UR5e"])

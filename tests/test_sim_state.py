@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import make_env
+from helpers import new_env
 
 from colorsort.cell.sim_state import rng_from_words, rng_to_words
 from colorsort.expert.factory import make_expert
@@ -24,11 +24,13 @@ def record(env, seed: int, steps: int):
 
 @pytest.fixture(scope="module")
 def recorded():
-    env = make_env(has_offscreen_renderer=True, use_camera_obs=True, camera_names="scene", camera_heights=64,
-                   camera_widths=64)
-    states, frames, actions = record(env, seed=5, steps=140)  # the box is picked and dropped by then
-    yield env, states, frames, actions
-    env.close()
+    env = new_env(has_offscreen_renderer=True, use_camera_obs=True, camera_names="scene", camera_heights=64,
+                  camera_widths=64)
+    try:
+        states, frames, actions = record(env, seed=5, steps=140)  # the box is picked and dropped by then
+        yield env, states, frames, actions
+    finally:
+        env.close()
 
 
 def test_restored_states_render_the_observed_frames_exactly(recorded):

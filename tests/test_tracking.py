@@ -2,19 +2,18 @@
 
 import numpy as np
 import pytest
-from conftest import make_env
 
 from colorsort.expert.factory import make_expert
 from colorsort.expert.sorter import Cycle
 from colorsort.expert.tracking import Sighting, TrackingExpert
 
 
-def tracking_env(robot: str = "IRB140", **overrides):
+def tracking_env(make_env, robot: str = "IRB140", **overrides):
     return make_env(robot, preset="tracking", has_offscreen_renderer=True, use_camera_obs=False, **overrides)
 
 
-def test_the_belt_never_stops_while_boxes_pass_the_ray_and_the_encoder_counts_belt_speed_times_time():
-    env = tracking_env(ignore_done=True)
+def test_the_belt_never_stops_while_boxes_pass_the_ray_and_the_encoder_counts_belt_speed_times_time(make_env):
+    env = tracking_env(make_env, ignore_done=True)
     obs = env.reset(seed=0)
     hold = np.concatenate([env.robot_spec.home, [-1.0, -1.0]])
     blocked = running = 0
@@ -25,12 +24,11 @@ def test_the_belt_never_stops_while_boxes_pass_the_ray_and_the_encoder_counts_be
     assert blocked > 10 and running == 300
     assert float(obs["belt_travel"]) == pytest.approx(env.config.belt_speed * env.cur_time, rel=1e-9)
     assert env.tally.dropped >= 3 and env.tally.placed == {"red": 0, "green": 0, "blue": 0}  # nobody picked them
-    env.close()
 
 
 @pytest.mark.parametrize("robot", ["IRB140", "UR5e"])
-def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins(robot):
-    env = tracking_env(robot=robot, ignore_done=True)
+def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins(robot, make_env):
+    env = tracking_env(make_env, robot=robot, ignore_done=True)
     obs = env.reset(seed=1)
     expert = make_expert(env)
     assert isinstance(expert, TrackingExpert)
@@ -42,11 +40,10 @@ def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins(ro
     assert [e.outcome for e in env.events[:4]] == ["placed"] * 4, env.events
     assert belt_stopped == 0 and expert.let_go == 0
     assert env.events[3].time < 4 * env.config.spawn_period + 5.0  # it keeps pace with the spawner
-    env.close()
 
 
-def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped():
-    env = tracking_env(ignore_done=True, spawn_period=600.0)  # one box, spawned at reset, rides far upstream
+def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped(make_env):
+    env = tracking_env(make_env, ignore_done=True, spawn_period=600.0)  # one box, spawned at reset, rides far upstream
     obs = env.reset(seed=2)
     expert = make_expert(env)
     expert.reset(obs)
@@ -65,7 +62,6 @@ def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped():
         obs, _, _, _ = env.step(action)
     assert expert.let_go == 1 and cycle.target_bin is None and not any(suction)
     assert [(e.serial, str(e.outcome)) for e in env.events] == [(serial, "dropped")] and env.tally.dropped == 1
-    env.close()
 
 
 def test_a_tracking_episode_replays_bit_for_bit(tmp_path):
@@ -82,17 +78,16 @@ def test_a_tracking_episode_replays_bit_for_bit(tmp_path):
     assert report.outcomes == ["placed", "placed"] and report.action_replay_ok
 
 
-def test_tracking_observation_state_ends_with_the_encoder():
+def test_tracking_observation_state_ends_with_the_encoder(make_env):
     from colorsort.data.schema import robot_state, state_names, state_size
 
-    env = tracking_env()
+    env = tracking_env(make_env)
     obs = env.reset(seed=0)
     for _ in range(10):
         obs, _, _, _ = env.step(np.concatenate([env.robot_spec.home, [-1.0, -1.0]]))
     names = state_names(env)
     assert names[-1] == "belt.travel" and len(names) == state_size(6, tracking=True) == state_size(6) + 1
     assert robot_state(env, obs)[-1] == pytest.approx(0.2 * 0.5, rel=1e-6)  # 0.2 m/s for 0.5 s
-    env.close()
 
 
 def test_the_cup_seals_and_lifts_a_box_moving_under_it_at_belt_speed():
@@ -110,17 +105,16 @@ def test_the_cup_seals_and_lifts_a_box_moving_under_it_at_belt_speed():
         assert r["offset_mm"] < max_offset_mm and r["turn_deg"] < 2.0, r
 
 
-def test_tracking_variants_give_the_encoder_to_gymnasium_and_lerobot():
+def test_tracking_variants_give_the_encoder_to_gymnasium_and_lerobot(closing):
     import gymnasium as gym
 
     from colorsort.benchmark.lerobot_env import ColorSortEnv
 
-    env = gym.make("colorsort/ColorSort-Tracking-v0", cameras=())
+    env = closing(gym.make("colorsort/ColorSort-Tracking-v0", cameras=()))
     obs, _ = env.reset(seed=0)
     assert obs["agent_pos"].shape == (24,) == env.observation_space["agent_pos"].shape
     obs, *_ = env.step(env.action_space.sample())
     assert obs["agent_pos"][-1] == pytest.approx(0.2 * 0.05, rel=1e-5)  # the encoder after one 50 ms step
-    env.close()
     assert ColorSortEnv(task="ColorSort-Tracking-v0").features["agent_pos"].shape == (24,)
     assert ColorSortEnv(task="ColorSort-v0").features["agent_pos"].shape == (23,)
 
