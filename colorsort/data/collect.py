@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -60,7 +59,7 @@ class CollectSummary:
 
 
 def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], None] = print) -> CollectSummary:
-    """Record, merge and report, as the module docstring says.
+    """Record, merge and report, as the module docstring says: plan, record, merge.
 
     Raises:
         FileExistsError: the output (or a killed run's staging folder) exists and neither --resume
@@ -71,85 +70,16 @@ def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], N
         os.environ.setdefault(key, value)
     start = time.perf_counter()
     root = Path(config.out).resolve()
-    marker = store.check_output(config, root)
-    summary = CollectSummary(str(root), config.repo_id, config.executor)
-    staging, run = store.open_staging(config, root, log)
-    for path in store.unfinished_shards(staging):
-        log(f"discarding {path.name}: its worker was killed while recording it")
-        shutil.rmtree(path)
-    earlier = store.finished_shards(staging)
-    store.check_shards(earlier, run, config, set(marker["tried"]) if marker else set())
-    summary.shards_kept = len(earlier)
-    tried = set(marker["tried"]) if marker else set()
-    failed = dict(marker.get("failed", {})) if marker else {}
-    for _, m in earlier:
-        tried.update(m["tried"])
-        failed.update(m["failed"])
-    todo = [i for i in range(config.episodes) if i not in tried]
-    if marker and not todo and not earlier:
-        shutil.rmtree(staging)
+    staging = store.StagingRun.open(config, root, log)
+    summary = CollectSummary(str(root), config.repo_id, config.executor, shards_kept=len(staging.shards()))
+    todo = plan(staging)
+    if staging.marker and not todo and not summary.shards_kept:
+        staging.discard()
         log(f"{root} already holds all {config.episodes} episodes tried; nothing to do")
         return summary
-
-    blocks = chunks(todo, config.shard_size, config.workers)
-    tasks = [Task(shard_name(b[0]), record, ShardJob(config, tuple(b), str(staging / shard_name(b[0])), run))
-             for b in blocks]
-    summary.shards = len(tasks)
-    executor = make_executor(config.executor_config, PRELOAD, forwarded_env(RECORDING_ENVIRONMENT))
-    bar = tqdm(total=len(todo), unit="episode", desc="recording", disable=not progress, smoothing=0.1)
-    done_shards = []
-
-    def on_episode(r: EpisodeResult) -> None:
-        summary.tried += 1
-        if r.kept:
-            summary.kept += 1
-            summary.frames += r.frames
-            summary.sim_time_s += r.sim_time_s
-        else:
-            summary.not_kept[r.reason] = summary.not_kept.get(r.reason, 0) + 1
-        bar.update(1)
-        show()
-
-    def on_shard(result: TaskResult) -> None:
-        done_shards.append(result.key)
-        show()
-
-    def show() -> None:
-        bar.set_postfix(kept=summary.kept, not_kept=summary.tried - summary.kept,
-                        shards=f"{len(done_shards)}/{len(tasks)}")
-
-    try:
-        results = executor.run(tasks, on_episode, on_shard) if tasks else []
-    finally:
-        bar.close()
-    summary.retried = sum(r.attempts > 1 for r in results)
-    summary.interrupted = any(r.stopped or (r.value and r.value.interrupted) for r in results)
-    summary.errors = [r.error or r.value.error for r in results if r.error or (r.value and r.value.error)]
-    for r in results:
-        for key, value in (r.value.seconds if r.value else {}).items():
-            summary.seconds[key] = summary.seconds.get(key, 0.0) + value
-
+    record_shards(staging, todo, summary, progress)
     t = time.perf_counter()
-    shards = store.finished_shards(staging)  # on disk: what every attempt, of this run or a killed one, finished
-    store.check_shards(shards, run, config, set(marker["tried"]) if marker else set())
-    for _, m in shards:
-        tried.update(m["tried"])
-        failed.update(m["failed"])
-    reports = [report_of(p, m) for p, m in shards]
-    sources = ([root] if marker else []) + [Path(s.root) for s in reports if s.kept]
-    if any(s.kept for s in reports):
-        merged = staging / "merged"
-        merger = merge if config.executor == "local" and config.workers == 1 else merge_in_child
-        merger(sources, merged, config.repo_id)
-        kept = (marker["episodes"] if marker else []) + [i for s in reports for i in s.kept]
-        layout = next((s.sim_state for s in reports if s.sim_state), None)
-        record_ = {"settings": config.settings(), "episodes": kept, "tried": sorted(tried), "failed": failed,
-                   "sim_state": layout}
-        store.publish(merged, root, staging, record_)
-    elif marker:  # nothing new kept: still remember what was tried
-        marker.update(tried=sorted(tried), failed=failed)
-        (root / store.MARKER).write_text(json.dumps(marker))
-    shutil.rmtree(staging, ignore_errors=True)
+    merge_and_publish(staging)
     summary.seconds["merging"] = time.perf_counter() - t
     summary.wall_s = time.perf_counter() - start
     info = root / "meta" / "info.json"
@@ -158,3 +88,76 @@ def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], N
         summary.dataset_frames, summary.dataset_episodes = meta["total_frames"], meta["total_episodes"]
         summary.size_mb = store.dir_size_mb(root)
     return summary
+
+
+def plan(staging: store.StagingRun) -> list[int]:
+    """The episode numbers still to record: those neither the dataset nor a finished shard has tried."""
+    tried, _ = staging.tried()
+    return [i for i in range(staging.config.episodes) if i not in tried]
+
+
+class _Progress:
+    """The progress bar and the summary's counters, fed by the executor's messages."""
+
+    def __init__(self, summary: CollectSummary, episodes: int, shards: int, show: bool):
+        self.summary, self.shards, self.done = summary, shards, 0
+        self.bar = tqdm(total=episodes, unit="episode", desc="recording", disable=not show, smoothing=0.1)
+
+    def on_episode(self, r: EpisodeResult) -> None:
+        s = self.summary
+        s.tried += 1
+        if r.kept:
+            s.kept, s.frames, s.sim_time_s = s.kept + 1, s.frames + r.frames, s.sim_time_s + r.sim_time_s
+        else:
+            s.not_kept[r.reason] = s.not_kept.get(r.reason, 0) + 1
+        self.bar.update(1)
+        self._show()
+
+    def on_shard(self, result: TaskResult) -> None:
+        self.done += 1
+        self._show()
+
+    def _show(self) -> None:
+        s = self.summary
+        self.bar.set_postfix(kept=s.kept, not_kept=s.tried - s.kept, shards=f"{self.done}/{self.shards}")
+
+
+def record_shards(staging: store.StagingRun, todo: list[int], summary: CollectSummary, progress: bool) -> None:
+    """Record ``todo`` in shards on the configured executor; each finished shard lands in the staging folder."""
+    config = staging.config
+    blocks = chunks(todo, config.shard_size, config.workers)
+    tasks = [Task(shard_name(b[0]), record, ShardJob(config, tuple(b), str(staging.folder / shard_name(b[0])),
+                                                       staging.run)) for b in blocks]
+    summary.shards = len(tasks)
+    executor = make_executor(config.executor_config, PRELOAD, forwarded_env(RECORDING_ENVIRONMENT))
+    bar = _Progress(summary, len(todo), len(tasks), progress)
+    try:
+        results = executor.run(tasks, bar.on_episode, bar.on_shard) if tasks else []
+    finally:
+        bar.bar.close()
+    summary.retried = sum(r.attempts > 1 for r in results)
+    summary.interrupted = any(r.stopped or (r.value and r.value.interrupted) for r in results)
+    summary.errors = [r.error or r.value.error for r in results if r.error or (r.value and r.value.error)]
+    for r in results:
+        for key, value in (r.value.seconds if r.value else {}).items():
+            summary.seconds[key] = summary.seconds.get(key, 0.0) + value
+
+
+def merge_and_publish(staging: store.StagingRun) -> None:
+    """Merge the dataset (when resuming) and every finished shard on disk, in episode order, and publish the
+    result with its marker; with nothing new kept, only remember what was tried. The staging folder goes."""
+    config, marker = staging.config, staging.marker
+    shards = staging.shards()  # on disk: what every attempt, of this run or a killed one, finished
+    tried, failed = staging.tried()
+    reports = [report_of(p, m) for p, m in shards]
+    if any(s.kept for s in reports):
+        sources = ([staging.root] if marker else []) + [Path(s.root) for s in reports if s.kept]
+        merger = merge if config.executor == "local" and config.workers == 1 else merge_in_child
+        merger(sources, staging.merged, config.repo_id)
+        kept = (marker["episodes"] if marker else []) + [i for s in reports for i in s.kept]
+        layout = next((s.sim_state for s in reports if s.sim_state), None)
+        staging.publish({"settings": config.settings(), "episodes": kept, "tried": sorted(tried), "failed": failed,
+                         "sim_state": layout})
+    elif marker:
+        staging.remember(tried, failed)
+    staging.discard()

@@ -5,7 +5,8 @@ folder beside it (``.<name>.staging``) and the merged result replaces the output
 ``meta/colorsort.json`` (the marker) keeps the settings, the episode number of each dataset
 episode in order, every episode number tried, why failed ones failed, and the sim-state layout.
 The staging folder outlives a run that was killed: its ``run.json`` names the run (an id and the
-settings) that its finished shards belong to, and ``--resume`` keeps them.
+settings) that its finished shards belong to, and ``--resume`` keeps them. ``StagingRun`` owns
+that folder for one run: it opens it, lists and checks its shards, and publishes or discards it.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ from __future__ import annotations
 import json
 import shutil
 import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from colorsort.data.config import CollectConfig
@@ -136,3 +139,65 @@ def check_shards(shards: list[tuple[Path, dict]], run: str, config: CollectConfi
             raise ValueError(f"{path} holds episodes {sorted(twice)} that the dataset or another shard already "
                              "holds: it comes from another run; move it away")
         seen |= set(marker["tried"])
+
+
+@dataclass
+class StagingRun:
+    """One collection run's staging folder beside the output ``root``, and what it knows.
+
+    Attributes:
+        marker: the output's marker when resuming a dataset (its episodes stay), else None.
+        run: the run id the folder's shards must carry.
+    """
+
+    config: CollectConfig
+    root: Path
+    folder: Path
+    run: str
+    marker: dict | None
+
+    @classmethod
+    def open(cls, config: CollectConfig, root: Path, log: Callable[[str], None]) -> StagingRun:
+        """Check the output (``check_output``), open the staging folder (``open_staging``), discard the
+        shards a killed worker left unfinished and check the finished ones (``check_shards``)."""
+        marker = check_output(config, root)
+        folder, run = open_staging(config, root, log)
+        for path in unfinished_shards(folder):
+            log(f"discarding {path.name}: its worker was killed while recording it")
+            shutil.rmtree(path)
+        staging = cls(config, root, folder, run, marker)
+        staging.shards()
+        return staging
+
+    def shards(self) -> list[tuple[Path, dict]]:
+        """The finished shards on disk (of this run or a killed one it resumes), checked, in episode order."""
+        found = finished_shards(self.folder)
+        check_shards(found, self.run, self.config, set(self.marker["tried"]) if self.marker else set())
+        return found
+
+    def tried(self) -> tuple[set[int], dict[str, str]]:
+        """Episode numbers tried so far (the dataset's and the finished shards'), and why the failed ones failed."""
+        tried = set(self.marker["tried"]) if self.marker else set()
+        failed = dict(self.marker.get("failed", {})) if self.marker else {}
+        for _, m in self.shards():
+            tried.update(m["tried"])
+            failed.update(m["failed"])
+        return tried, failed
+
+    @property
+    def merged(self) -> Path:
+        """Where the merged dataset is built before it is published."""
+        return self.folder / "merged"
+
+    def publish(self, record: dict) -> None:
+        """Put the merged dataset at the output with ``record`` as its marker, in one rename."""
+        publish(self.merged, self.root, self.folder, record)
+
+    def remember(self, tried: set[int], failed: dict[str, str]) -> None:
+        """Nothing new was kept: record in the existing dataset's marker what was tried."""
+        assert self.marker is not None
+        self.marker.update(tried=sorted(tried), failed=failed)
+        (self.root / MARKER).write_text(json.dumps(self.marker))
+
+    def discard(self) -> None:
+        shutil.rmtree(self.folder, ignore_errors=True)
