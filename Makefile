@@ -47,16 +47,23 @@ test-fast: lint
 	$(VENV)/bin/python -m pytest -q -m "not slow" tests
 
 bench: $(STAMP)
+	@# each writes what it prints to docs/results/<script>_<arguments>.md, which the docs pages link
 	$(VENV)/bin/python demos/bench_env.py
 	$(VENV)/bin/python demos/bench_perception.py --views 1000
-	$(VENV)/bin/python demos/bench_sort.py --preset default --seeds 10 --boxes 20
-	$(VENV)/bin/python demos/bench_sort.py --preset seed --seeds 3 --boxes 4
-	$(VENV)/bin/python demos/bench_tracking.py --seeds 10 --boxes 20
 	$(VENV)/bin/python demos/bench_seal.py
+	$(VENV)/bin/python demos/bench_sort.py --preset default --seeds 10 --boxes 20 --workers 2
+	$(VENV)/bin/python demos/bench_sort.py --preset seed --seeds 3 --boxes 4
+	$(VENV)/bin/python demos/bench_sort.py --robot Panda --seeds 2 --boxes 10
+	$(VENV)/bin/python demos/bench_sort.py --robot UR5e --seeds 2 --boxes 10
+	$(VENV)/bin/python demos/bench_tracking.py --seeds 10 --boxes 20 --workers 2
+	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot Panda --seeds 2 --boxes 10
+	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot UR5e --seeds 2 --boxes 10
 	$(VENV)/bin/python demos/bench_collect.py --episodes 48
-	$(VENV)/bin/python demos/bench_scale.py
-	$(VENV)/bin/python demos/bench_eval.py
+	$(VENV)/bin/python demos/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
+	$(VENV)/bin/python demos/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
 	$(VENV)/bin/python demos/bench_suite.py --episodes 10
+	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking --episodes 20
+	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-state --variant fast --episodes 10
 
 # a learned baseline: demos, lerobot-train, colorsort-eval, learning curve (`make baseline RECIPE=camera-tracking`;
 # `colorsort-baseline --list` names the recipes); about 1.5 h a recipe on 2 CPU cores

@@ -127,3 +127,17 @@ def test_every_results_file_the_docs_link_exists_and_every_results_file_is_linke
     docs = "\n".join(p.read_text() for p in [README, *(REPO / "docs").glob("*.md")])
     for page in sorted(results.glob("*.md")) if results.is_dir() else []:
         assert f"results/{page.name}" in docs, f"docs/results/{page.name} is linked from no page"
+
+
+def test_make_bench_rewrites_exactly_the_results_files_the_docs_link(monkeypatch):
+    """Every docs/results file is what a line of `make bench` writes, and every such line's file is there."""
+    from colorsort.results import results_path
+
+    monkeypatch.delenv("COLORSORT_RESULTS")
+    makefile = (REPO / "Makefile").read_text()
+    recipe = makefile[makefile.index("\nbench:"):].split("\n\n")[0]
+    commands = [shlex.split(line.split("$(VENV)/bin/python", 1)[1]) for line in recipe.splitlines()
+                if "$(VENV)/bin/python demos/bench_" in line]
+    expected = {results_path(argv[0], argv[1:]).name for argv in commands}
+    present = {p.name for p in (REPO / "docs" / "results").glob("*.md")}
+    assert expected == present, f"make bench writes {sorted(expected - present)}; unknown: {sorted(present - expected)}"
