@@ -146,3 +146,13 @@ def test_importing_any_module_changes_no_environment_variable_or_warning_filter(
     assert proc.returncode == 0, proc.stderr[-2000:]
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result == {"env": [], "filters": 0}
+
+
+def test_no_private_name_crosses_a_module():
+    """``from colorsort.x import _name`` would tie a module to another's internals: share it under a public name."""
+    crossing = []
+    for name, path in modules():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("colorsort"):
+                crossing += [f"{name} imports {node.module}.{a.name}" for a in node.names if a.name.startswith("_")]
+    assert not crossing, "\n".join(crossing)

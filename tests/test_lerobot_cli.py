@@ -68,8 +68,8 @@ def newest_eval_info(work: Path) -> dict:
     return json.loads(newest.read_text())["overall"]
 
 
-@pytest.mark.parametrize("batch_size,use_async,discover", [(1, None, False), (2, None, False), (2, "false", True)],
-                         ids=["batch1", "batch2-async", "batch2-sync-discover-flag"])
+@pytest.mark.parametrize("batch_size,use_async,discover", [(2, None, False), (2, "false", True)],
+                         ids=["batch2-async", "batch2-sync-discover-flag"])
 def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint, batch_size, use_async, discover):
     argv = replace_flag(documented_command("lerobot-eval"), "--eval.n_episodes", str(batch_size))
     argv = replace_flag(argv, "--eval.batch_size", str(batch_size))

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from colorsort.expert.base import Cycle
 from colorsort.expert.factory import make_expert
-from colorsort.expert.sorter import Cycle
 from colorsort.expert.tracking import Sighting, TrackingExpert
 
 

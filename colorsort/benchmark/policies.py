@@ -27,7 +27,7 @@ class Policy(Protocol):
 
 
 class ExpertPolicy:
-    """The scripted expert (``colorsort.expert.sorter``): it reads the robosuite observation behind ``obs``."""
+    """The scripted expert (``expert.factory.make_expert``): it reads the robosuite observation behind ``obs``."""
 
     name = "expert"
 

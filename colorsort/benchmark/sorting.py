@@ -18,8 +18,8 @@ from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sorting_time_limit
 from colorsort.data.video import VideoWriter, contact_sheet, save_png
+from colorsort.expert.base import Expert
 from colorsort.expert.factory import make_expert
-from colorsort.expert.sorter import SortingExpert
 from colorsort.robots import get_robot
 
 SHEET_TILE_WIDTH = 320  # [px] frames kept for the contact sheet are shrunk to this width
@@ -158,7 +158,7 @@ def _box_at_sensor(env: ColorSort) -> int | None:
     return box.serial
 
 
-def _overlay(frame: np.ndarray, expert: SortingExpert, env: ColorSort) -> np.ndarray:
+def _overlay(frame: np.ndarray, expert: Expert, env: ColorSort) -> np.ndarray:
     """The frame with the expert's phase, the colour it saw and the bins' counts written on it."""
     out = frame.copy()
     counts = env.task_info()["bins"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from colorsort.expert.base import Expert
 from colorsort.expert.calibration import Calibration, sensor_source
 from colorsort.expert.config import ExpertConfig
 from colorsort.expert.sorter import SortingExpert
@@ -13,7 +14,7 @@ if TYPE_CHECKING:
     from colorsort.cell.env import ColorSort
 
 
-def make_expert(env: ColorSort, config: ExpertConfig = ExpertConfig()) -> SortingExpert:
+def make_expert(env: ColorSort, config: ExpertConfig = ExpertConfig()) -> Expert:
     """A ``SortingExpert`` on a stopping belt, a ``TrackingExpert`` on a tracking one, calibrated on ``env``.
 
     ``env`` must have an off-screen renderer: the expert sees boxes through the sensor camera.

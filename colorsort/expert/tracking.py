@@ -16,17 +16,27 @@ Phases: ``MOVE_TO_WAIT`` (over the upstream end of the reach window), ``WAIT_FOR
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
+from enum import Enum
+from functools import cached_property
 
 import numpy as np
 
 from colorsort.config import CellLayout
-from colorsort.expert.calibration import Calibration
+from colorsort.expert.base import Cycle, Expert, Handler, ray_blocked, sealed
 from colorsort.expert.config import ExpertConfig
-from colorsort.expert.perception import bin_for
 from colorsort.expert.planning import JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
-from colorsort.expert.sorter import Cycle, Phase, SortingExpert, _Motion
+
+
+class Phase(Enum):
+    """The tracking expert's phases."""
+
+    MOVE_TO_WAIT = "move to wait pose"
+    WAIT_FOR_BOX = "wait for box"
+    INTERCEPT = "intercept box"  # over the moving box, moving with it
+    TRACK = "track box"  # down onto the moving box, seal and lift, moving with it
+    MOVE_OVER_BIN = "move over bin"
+    RELEASE = "release"
 
 
 @dataclass
@@ -87,8 +97,8 @@ def track_heights(config: ExpertConfig, layout: CellLayout, dt: float) -> np.nda
     return np.where(tau <= t1, down, up)
 
 
-class TrackingExpert(SortingExpert):
-    """Sorts boxes from a belt that never stops; see the module docstring. Built like ``SortingExpert``
+class TrackingExpert(Expert):
+    """Sorts boxes from a belt that never stops; see the module docstring. Args: as ``base.Expert``
     (``make_expert`` returns one for a tracking task).
 
     Attributes:
@@ -96,22 +106,24 @@ class TrackingExpert(SortingExpert):
         window: (lowest, highest) x [m] over the belt centre line where the cup reaches a box.
     """
 
-    def __init__(self, calibration: Calibration, sensor_image: Callable[[dict], np.ndarray],
-                 config: ExpertConfig = ExpertConfig()):
-        super().__init__(calibration, sensor_image, config)
-        self._handlers.update({Phase.INTERCEPT: self._intercept, Phase.TRACK: self._track})
+    START = Phase.MOVE_TO_WAIT
 
-    def _drop_seed(self) -> np.ndarray:
+    def handlers(self) -> dict[Enum, Handler]:
+        return {Phase.MOVE_TO_WAIT: self._move_to_wait, Phase.WAIT_FOR_BOX: self._wait_for_box,
+                Phase.INTERCEPT: self._intercept, Phase.TRACK: self._track,
+                Phase.MOVE_OVER_BIN: self._move_over_bin, Phase.RELEASE: self._release}
+
+    def drop_seed(self) -> np.ndarray:
         """Home: from the wait pose over the far end of the belt, IK for the far bins lands in other branches."""
         return self.home
 
-    def _wait_point(self) -> tuple[float, float, float]:
+    def wait_point(self) -> tuple[float, float, float]:
         """Over the belt at the upstream end of the reach window, as high as a lifted box's top."""
-        self.window = self._reach_window()
         L = self.layout
         return (self.window[1] - 0.02, L.belt_y, L.belt_top_z + L.box_size + self.config.track_lift_gap)
 
-    def _reach_window(self) -> tuple[float, float]:
+    @cached_property
+    def window(self) -> tuple[float, float]:
         """The stretch of the belt centre line [m] where the cup reaches over, onto and the lift height of a
         box, 2 cm inside its ends: grown both ways from the point nearest the home pose's cup, each IK
         warm-started from its neighbour's."""
@@ -149,6 +161,7 @@ class TrackingExpert(SortingExpert):
 
     def reset(self, obs: dict | None = None) -> None:
         super().reset(obs)
+        self._track_plan: DensePath | None = None
         self.queue: list[Sighting] = []
         self.let_go = 0
         self.travel = 0.0  # [m] the belt encoder
@@ -162,19 +175,16 @@ class TrackingExpert(SortingExpert):
         if self._last_travel is not None:
             self.belt_speed = (travel - self._last_travel) / self.dt
         self.travel, self._last_travel = travel, travel
-        blocked = float(obs["box_detected"]) > 0.5
+        blocked = ray_blocked(obs)
         if blocked and not self._ray_was_blocked:
-            self._look(obs)
+            self._sight(obs)
         self._ray_was_blocked = blocked
         return super().act(obs)
 
-    def _look(self, obs: dict) -> None:
+    def _sight(self, obs: dict) -> None:
         """One photo as the ray fires: a box of a bin colour joins the queue; any other rides on."""
-        t = self.sensor.box_at_sensor(self.sensor_image(obs))
-        target_bin = bin_for(t)
-        cycle = Cycle(t.color if t is not None else "none", self.time, target_bin=target_bin)
-        self.cycles.append(cycle)
-        if t is not None and target_bin is not None:
+        t, cycle = self._look(obs)
+        if t is not None and cycle.target_bin is not None:
             x, y = float(t.center[0]), float(t.center[1])
             self.queue.append(Sighting(cycle, x, y, self.cup_yaw + t.yaw, self.travel))
         else:
@@ -188,7 +198,7 @@ class TrackingExpert(SortingExpert):
         """The commanded reference now: position [rad], velocity [rad/s], acceleration [rad/s^2]."""
         if self.motion is None:
             return self._q_cmd, np.zeros_like(self._q_cmd), np.zeros_like(self._q_cmd)
-        return self.motion.trajectory.sample(self.time - self.motion.started)
+        return self.motion.sample(self.time)
 
     def _box_x(self, s: Sighting, t: float) -> float:
         """[m] the box's predicted x at expert time ``t``, from the photo and the encoder."""
@@ -211,7 +221,7 @@ class TrackingExpert(SortingExpert):
                 self.queue.pop(0)
                 self.current = s
                 approach, self._track_plan = plan
-                self.motion = _Motion(approach, self.time, np.inf)
+                self._follow(approach, np.inf)
                 self._enter(Phase.INTERCEPT)
                 return True
             self.queue.pop(0)
@@ -276,26 +286,24 @@ class TrackingExpert(SortingExpert):
 
     # 3. meet the box, then follow it down, seal and lift
     def _intercept(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
-        assert self.motion is not None, "INTERCEPT follows a planned interception"
-        if self.time - self.motion.started >= self.motion.trajectory.duration - 1e-9:
+        assert self.motion is not None and self._track_plan is not None, "INTERCEPT follows a planned interception"
+        if self.motion.done(self.time):
             self.suction = True
-            self.motion = _Motion(self._track_plan, self.time, np.inf)
+            self._follow(self._track_plan, np.inf)
             self._enter(Phase.TRACK)
 
     def _track(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         assert self.motion is not None and self.current is not None, "TRACK follows an interception"
         path = self.motion.trajectory
         assert isinstance(path, DensePath), "TRACK follows the box along a dense path"
-        if self.time - self.motion.started < path.duration - 1e-9:
+        if not self.motion.done(self.time):
             return
-        if float(obs["suction_sealed"]) > 0.5:  # 5, 6: on to the bin, from the moving state
+        if sealed(obs):  # 5, 6: on to the bin, from the moving state
             color = self.current.cycle.target_bin
             assert color is not None, "only a box with a bin is met"
-            slots = self.q_drop[color]
-            trajectory = plan_motion(path.goal, slots[self.drops[color] % len(slots)], self.calibration.max_velocity,
+            trajectory = plan_motion(path.goal, self._next_drop(color), self.calibration.max_velocity,
                                      self.config.motion, start_velocity=path.qd[-1])
-            self.motion = _Motion(trajectory, self.time, self.config.drop_tolerance)
-            self.drops[color] += 1
+            self._follow(trajectory, self.config.drop_tolerance)
             self._enter(Phase.MOVE_OVER_BIN)
         else:  # no seal: the box rides on
             self.suction = False
@@ -305,9 +313,13 @@ class TrackingExpert(SortingExpert):
             self._start_from_here(self.q_wait, self.config.wait_tolerance)
             self._enter(Phase.MOVE_TO_WAIT)
 
+    def _move_over_bin(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
+        if self._arrived(q):
+            self.suction = False
+            self._enter(Phase.RELEASE)
+
     def _release(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
-        sealed = float(obs["suction_sealed"]) > 0.5
-        if not sealed and self.time - self.phase_started >= self.config.release_time:
+        if self._released(obs):
             assert self.current is not None, "RELEASE follows a pick"
             self.current.cycle.done_at = self.time
             self.current = None
@@ -319,4 +331,4 @@ class TrackingExpert(SortingExpert):
         ref, vel, acc = self._current_state()
         trajectory = plan_motion(ref, goal, self.calibration.max_velocity, self.config.motion, start_velocity=vel,
                                  start_acceleration=acc)
-        self.motion = _Motion(trajectory, self.time, tolerance)
+        self._follow(trajectory, tolerance)

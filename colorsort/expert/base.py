@@ -1,0 +1,200 @@
+"""What every scripted expert shares: the cell as it knows it, a motion follower, the look, the drop slots.
+
+An expert is a phase machine over the cell's sensors only (the ray, the colour camera, the arm's
+joints, the vacuum switch, on a tracking belt the encoder): each subclass names its own phases
+(an ``Enum``) and a handler per phase; ``act`` runs the current phase's handler, then samples the
+motion being followed into joint targets. The stopping belt's expert is ``sorter.SortingExpert``,
+the tracking belt's ``tracking.TrackingExpert``; ``factory.make_expert`` picks one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from colorsort.config import BIN_COLORS
+from colorsort.expert.calibration import Calibration
+from colorsort.expert.config import ExpertConfig
+from colorsort.expert.perception import ColorSensor, Detection, bin_for
+from colorsort.expert.planning import CupIK, Trajectory, UnreachableWaypoint, Waypoint, plan_motion, site_yaw
+
+Handler = Callable[[dict, np.ndarray, np.ndarray], None]  # (observation, joints now [rad], motion goal [rad])
+
+
+@dataclass
+class Cycle:
+    """One box handled by the expert: what it saw and when [s, sim time]."""
+
+    seen_color: str
+    detected_at: float
+    done_at: float | None = None
+    target_bin: str | None = None  # None: let through
+
+
+@dataclass
+class Motion:
+    """A trajectory being followed since expert time ``started`` [s]."""
+
+    trajectory: Trajectory
+    started: float
+    tolerance: float  # [rad] max joint error that counts as arrived
+
+    def done(self, now: float) -> bool:
+        """Its time is up (whether or not the joints are there)."""
+        return now - self.started >= self.trajectory.duration - 1e-9
+
+    def arrived(self, q: np.ndarray, now: float) -> bool:
+        """Its time is up and the joints ``q`` [rad] are within ``tolerance`` of its goal."""
+        return (now - self.started >= self.trajectory.duration
+                and float(np.max(np.abs(q - self.trajectory.goal))) < self.tolerance)
+
+    def sample(self, now: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position [rad], velocity [rad/s], acceleration [rad/s^2] at expert time ``now`` [s]."""
+        return self.trajectory.sample(now - self.started)
+
+
+def sealed(obs: dict) -> bool:
+    """The cup's vacuum switch."""
+    return float(obs["suction_sealed"]) > 0.5
+
+
+def ray_blocked(obs: dict) -> bool:
+    """The ray sensor sees a box."""
+    return float(obs["box_detected"]) > 0.5
+
+
+class Expert:
+    """The machinery of a scripted expert; a subclass gives its phases and what it does in each.
+
+    Args:
+        calibration: the cell as the expert knows it (``Calibration.from_env``).
+        sensor_image: the colour image for an observation (``calibration.sensor_source``).
+        config: the expert's settings.
+
+    A subclass sets ``START`` (its first phase) and implements ``handlers``, ``wait_point`` and
+    ``drop_seed``. Use: ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)``,
+    then ``action = expert.act(obs)`` every step.
+    """
+
+    START: Enum
+
+    def __init__(self, calibration: Calibration, sensor_image: Callable[[dict], np.ndarray],
+                 config: ExpertConfig = ExpertConfig()):
+        self.calibration, self.config = calibration, config
+        self.sensor_image = sensor_image
+        self.layout = L = calibration.layout
+        self.dt = calibration.control_period
+        self.home = calibration.home
+        self.ik = CupIK(calibration.kinematics, self.home)
+        self.cup_yaw = site_yaw(self.ik.cup_pose(self.home)[1])  # a multiple of 90 deg: bins' axes
+        self.sensor = ColorSensor(calibration.camera, L, config.perception)
+        self.q_wait = self.ik.solve(Waypoint("wait", self.wait_point(), self.cup_yaw), self.home)
+        self.q_drop = {color: self._drop_slots(color, k) for k, color in enumerate(BIN_COLORS)}
+        self._handlers: dict[Enum, Handler] = self.handlers()
+        self.reset()
+
+    # ------------------------------------------------------------------ what a subclass gives
+    def handlers(self) -> dict[Enum, Handler]:
+        """One handler per phase."""
+        raise NotImplementedError
+
+    def wait_point(self) -> tuple[float, float, float]:
+        """Where the cup waits for a box [m]."""
+        raise NotImplementedError
+
+    def drop_seed(self) -> np.ndarray:
+        """The joint angles [rad] the drop points' IK starts from."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ the loop
+    def reset(self, obs: dict | None = None) -> None:
+        """Start a new episode (from the arm's current joints if ``obs`` is given)."""
+        self.phase = self.START
+        self.time = 0.0
+        self.phase_started = 0.0
+        self.motion: Motion | None = None
+        self.suction = False
+        self.belt_pass = False
+        self.drops = {c: 0 for c in BIN_COLORS}
+        self.cycles: list[Cycle] = []
+        self._q_cmd = np.array(obs["robot0_joint_pos"], float) if obs is not None else self.home.copy()
+        self._start_motion(self._q_cmd, self.q_wait, self.config.wait_tolerance)
+
+    @property
+    def seen_color(self) -> str | None:
+        """Colour of the box being handled, as the camera saw it, or None."""
+        return self.cycles[-1].seen_color if self.cycles and self.cycles[-1].done_at is None else None
+
+    def act(self, obs: dict) -> np.ndarray:
+        """The action for this step: joint targets [rad], suction, belt pass."""
+        q = np.asarray(obs["robot0_joint_pos"], float)
+        goal = self.motion.trajectory.goal if self.motion is not None else self._q_cmd
+        self._handlers[self.phase](obs, q, goal)
+        if self.motion is not None:
+            ref, vel, _ = self.motion.trajectory.sample(self.time - self.motion.started + self.dt)
+            self._q_cmd = ref + self.calibration.lead * vel
+        self.time += self.dt
+        return np.concatenate([self._q_cmd, [1.0 if self.suction else -1.0, 1.0 if self.belt_pass else -1.0]])
+
+    def _enter(self, phase: Enum) -> None:
+        self.phase, self.phase_started = phase, self.time
+
+    # ------------------------------------------------------------------ the motion follower
+    def _start_motion(self, start: np.ndarray, goal: np.ndarray, tolerance: float) -> None:
+        """A jerk-limited motion from rest at ``start`` to rest at ``goal`` [rad], from now."""
+        trajectory = plan_motion(start, goal, self.calibration.max_velocity, self.config.motion)
+        self.motion = Motion(trajectory, self.time, tolerance)
+
+    def _follow(self, trajectory: Trajectory, tolerance: float) -> None:
+        """Follow ``trajectory`` from now."""
+        self.motion = Motion(trajectory, self.time, tolerance)
+
+    def _arrived(self, q: np.ndarray) -> bool:
+        return self.motion is None or self.motion.arrived(q, self.time)
+
+    # ------------------------------------------------------------------ what both experts do alike
+    def _look(self, obs: dict) -> tuple[Detection | None, Cycle]:
+        """One photo of the box at the sensor; its cycle starts (``target_bin`` None: it is let through)."""
+        t = self.sensor.box_at_sensor(self.sensor_image(obs))
+        cycle = Cycle(t.color if t is not None else "none", self.time, target_bin=bin_for(t))
+        self.cycles.append(cycle)
+        return t, cycle
+
+    def _next_drop(self, color: str) -> np.ndarray:
+        """The joint angles [rad] of the next release point over the ``color`` bin (the slots in turn)."""
+        slots = self.q_drop[color]
+        q = slots[self.drops[color] % len(slots)]
+        self.drops[color] += 1
+        return q
+
+    def _released(self, obs: dict) -> bool:
+        """In ``release``: the seal is gone and the box has had ``release_time`` to fall clear."""
+        return not sealed(obs) and self.time - self.phase_started >= self.config.release_time
+
+    def _drop_slots(self, color: str, index: int) -> list[np.ndarray]:
+        """Joint angles of up to ``drop_slots`` release points over a bin, nearest the robot first.
+
+        Candidates lie on a grid inside the bin, far enough from its walls for a box of any yaw;
+        those the arm cannot reach are skipped (the Panda reaches less far than the IRB 140).
+        """
+        L, cfg = self.layout, self.config
+        bx, by = L.bin_center(index)
+        margin = L.box_size / 2 + 0.01 + L.bin_wall  # an axis-aligned box 1 cm clear of the walls
+        hx, hy = L.bin_size[0] / 2 - margin, L.bin_size[1] / 2 - margin
+        z = L.bin_size[2] + cfg.drop_clearance + L.box_size
+        grid = [(bx + dx, by + dy) for dx in np.linspace(-hx, hx, 4) for dy in np.linspace(-hy, hy, 3)]
+        grid.sort(key=lambda p: np.hypot(*p))
+        slots = []
+        for x, y in grid:
+            try:
+                slots.append(self.ik.solve(Waypoint(f"{color} bin drop", (x, y, z), self.cup_yaw), self.drop_seed()))
+            except UnreachableWaypoint:
+                continue
+            if len(slots) == cfg.drop_slots:
+                return slots
+        if not slots:
+            raise UnreachableWaypoint(f"No drop point over the {color} bin is within the arm's reach")
+        return slots
