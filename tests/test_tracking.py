@@ -134,3 +134,20 @@ def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
         else:  # the belt waits while the arm picks each box
             assert report["belt_stopped_s"] > 3 * 0.5
     assert "belt stood still 0.0 s" in capsys.readouterr().out
+
+
+def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env):
+    """tracking-fast (0.3 m/s, a box every 2 s): 20 boxes, every one in the bin of its colour, none let go,
+    the belt never stopping, at 28 or more a minute (demos/bench_tracking.py runs 10 seeds of 20)."""
+    env = make_env(preset="tracking-fast", has_offscreen_renderer=True, ignore_done=True, seed=7)
+    obs = env.reset()
+    expert = make_expert(env)
+    expert.reset(obs)
+    belt_stopped = 0
+    while len(env.events) < 20 and env.cur_time < 80.0:
+        obs, _, _, info = env.step(expert.act(obs))
+        belt_stopped += not info["belt_running"]
+    assert [str(e.outcome) for e in env.events[:20]] == ["placed"] * 20, env.events
+    assert all(e.bin == e.color for e in env.events[:20])
+    assert belt_stopped == 0 and expert.let_go == 0
+    assert 60.0 * 20 / env.events[19].time >= 28.0

@@ -109,6 +109,11 @@ class Expert:
         """The joint angles [rad] the drop points' IK starts from."""
         raise NotImplementedError
 
+    def slot_distance(self, point: tuple[float, float]) -> float:
+        """How far a release point (x, y) [m] over a bin is from where the expert picks: slots nearest
+        first. Here from the robot's base (the world origin)."""
+        return float(np.hypot(*point))
+
     # ------------------------------------------------------------------ the loop
     def reset(self, obs: dict | None = None) -> None:
         """Start a new episode (from the arm's current joints if ``obs`` is given)."""
@@ -186,7 +191,7 @@ class Expert:
         hx, hy = L.bin_size[0] / 2 - margin, L.bin_size[1] / 2 - margin
         z = L.bin_size[2] + cfg.drop_clearance + L.box_size
         grid = [(bx + dx, by + dy) for dx in np.linspace(-hx, hx, 4) for dy in np.linspace(-hy, hy, 3)]
-        grid.sort(key=lambda p: np.hypot(*p))
+        grid.sort(key=self.slot_distance)
         slots = []
         for x, y in grid:
             try:

@@ -72,3 +72,10 @@ class ExpertConfig:
         for name in ("track_descend_time", "track_hold_time", "track_lift_time"):
             check_range(name, getattr(self, name), 0.05, 2.0)
         check_range("track_lift_gap", self.track_lift_gap, 0.03, 0.3)
+
+
+STOPPING_EXPERT = ExpertConfig()
+# On the never-stopping belt every tenth of a second of the cycle counts (tracking-fast brings a box every
+# 2 s): the cup leaves the bin as soon as the seal is gone (the box falls free of a cup moving up and
+# away), and it follows the box down and up faster (demos/bench_tracking.py measures the result).
+TRACKING_EXPERT = ExpertConfig(release_time=0.0, track_descend_time=0.10, track_lift_time=0.08)

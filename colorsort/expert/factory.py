@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 from colorsort.expert.base import Expert
 from colorsort.expert.calibration import Calibration, sensor_source
-from colorsort.expert.config import ExpertConfig
+from colorsort.expert.config import STOPPING_EXPERT, TRACKING_EXPERT, ExpertConfig
 from colorsort.expert.sorter import SortingExpert
 from colorsort.expert.tracking import TrackingExpert
 
@@ -14,8 +14,9 @@ if TYPE_CHECKING:
     from colorsort.cell.env import ColorSort
 
 
-def make_expert(env: ColorSort, config: ExpertConfig = ExpertConfig()) -> Expert:
-    """A ``SortingExpert`` on a stopping belt, a ``TrackingExpert`` on a tracking one, calibrated on ``env``.
+def make_expert(env: ColorSort, config: ExpertConfig | None = None) -> Expert:
+    """A ``SortingExpert`` on a stopping belt, a ``TrackingExpert`` on a tracking one, calibrated on ``env``;
+    ``config`` defaults to the belt's preset (``STOPPING_EXPERT``, ``TRACKING_EXPERT``).
 
     ``env`` must have an off-screen renderer: the expert sees boxes through the sensor camera.
     Use: ``expert = make_expert(env)``, ``expert.reset(obs)`` after ``env.reset()``, then
@@ -23,6 +24,8 @@ def make_expert(env: ColorSort, config: ExpertConfig = ExpertConfig()) -> Expert
     """
     if not env.has_offscreen_renderer:
         raise ValueError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
+    tracking = env.config.tracking
+    config = config or (TRACKING_EXPERT if tracking else STOPPING_EXPERT)
     size, image = sensor_source(env, config.sensor_image_size)
-    cls = TrackingExpert if env.config.tracking else SortingExpert
+    cls = TrackingExpert if tracking else SortingExpert
     return cls(Calibration.from_env(env, size), image, config)

@@ -122,6 +122,11 @@ class TrackingExpert(Expert):
         L = self.layout
         return (self.window[1] - 0.02, L.belt_y, L.belt_top_z + L.box_size + self.config.track_lift_gap)
 
+    def slot_distance(self, point: tuple[float, float]) -> float:
+        """From the middle of the reach window on the belt's centre line: the bins' slots nearest the belt
+        first, which shortens both the carry and the way back to the next box."""
+        return float(np.hypot(point[0] - sum(self.window) / 2, point[1] - self.layout.belt_y))
+
     @cached_property
     def window(self) -> tuple[float, float]:
         """The stretch of the belt centre line [m] where the cup reaches over, onto and the lift height of a
