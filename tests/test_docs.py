@@ -137,7 +137,7 @@ def test_make_bench_rewrites_exactly_the_results_files_the_docs_link(monkeypatch
     makefile = (REPO / "Makefile").read_text()
     recipe = makefile[makefile.index("\nbench:"):].split("\n\n")[0]
     commands = [shlex.split(line.split("$(VENV)/bin/python", 1)[1]) for line in recipe.splitlines()
-                if "$(VENV)/bin/python demos/bench_" in line]
+                if "$(VENV)/bin/python demos/" in line]
     expected = {results_path(argv[0], argv[1:]).name for argv in commands}
     present = {p.name for p in (REPO / "docs" / "results").glob("*.md")}
     assert expected == present, f"make bench writes {sorted(expected - present)}; unknown: {sorted(present - expected)}"

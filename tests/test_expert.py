@@ -132,3 +132,25 @@ def test_the_expert_is_built_from_a_calibration_not_the_env(make_env):
     assert isinstance(cal, Calibration) and not hasattr(expert, "env")
     assert np.array_equal(cal.home, env.robot_spec.home) and cal.control_period == env.control_timestep
     assert cal.camera.width == 128 and cal.kinematics.nq == len(env.robot_spec.home)
+
+
+def test_the_stopping_belt_expert_sorts_as_it_always_has(tmp_path):
+    """`colorsort-sort --preset default --boxes 6 --seed 0 --json`, against the summary recorded before the
+    experts became one family (tests/data): the same boxes, bins, phase times and cycle times."""
+    from pathlib import Path
+
+    path = tmp_path / "sort.json"
+    assert sort_main(["--preset", "default", "--boxes", "6", "--seed", "0", "--json", str(path)]) == 0
+    recorded = json.loads((Path(__file__).parent / "data" / "sort_default_6boxes_seed0.json").read_text())
+    now = json.loads(path.read_text())
+
+    def rounded(x):
+        if isinstance(x, float):
+            return round(x, 6)
+        if isinstance(x, dict):
+            return {k: rounded(v) for k, v in x.items()}
+        if isinstance(x, list):
+            return [rounded(v) for v in x]
+        return x
+
+    assert rounded(now) == rounded(recorded)

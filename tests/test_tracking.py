@@ -151,3 +151,34 @@ def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env
     assert all(e.bin == e.color for e in env.events[:20])
     assert belt_stopped == 0 and expert.let_go == 0
     assert 60.0 * 20 / env.events[19].time >= 28.0
+
+
+def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_env):
+    """A box standing at x = 0.45 m, the red bin: each leg of the bound is the largest joint move over its
+    datasheet speed, each leg of the ruckig reference is ruckig's own plan (never shorter), and the expert's
+    measured cycle on tracking-fast is no shorter than the bound of any bin."""
+    from colorsort.config import BIN_COLORS
+    from colorsort.expert.bound import LEGS, cycle_at, shortest_cycle
+    from colorsort.expert.planning import Waypoint, plan_motion
+
+    env = make_env(preset="tracking-fast", has_offscreen_renderer=True, seed=0)
+    obs = env.reset()
+    expert = make_expert(env)
+    L, cfg, vmax = expert.layout, expert.config, expert.calibration.max_velocity
+    top = L.belt_top_z + L.box_size
+    q_over = expert.ik.solve(Waypoint("over", (0.45, L.belt_y, top + cfg.approach_gap), expert.cup_yaw), expert.q_wait)
+    q_on = expert.ik.solve(Waypoint("on", (0.45, L.belt_y, top - cfg.press), expert.cup_yaw), q_over)
+    bound, reference = cycle_at(expert, 0.45, "red", "speed"), cycle_at(expert, 0.45, "red", "ruckig")
+    assert bound.legs["down onto the box"] == pytest.approx(np.max(np.abs(q_on - q_over) / vmax))
+    assert reference.legs["down onto the box"] == pytest.approx(plan_motion(q_over, q_on, vmax, cfg.motion).duration)
+    assert bound.legs["seal"] == bound.legs["release"] == expert.dt
+    assert all(reference.legs[leg] >= bound.legs[leg] for leg in LEGS)
+    assert bound.total == pytest.approx(sum(bound.legs.values()))
+    fastest = min(shortest_cycle(expert, c).total for c in BIN_COLORS)
+
+    expert.reset(obs)
+    active = 0
+    while len(env.events) < 10:
+        active += expert.phase.value in ("intercept box", "track box", "move over bin", "release")
+        obs, *_ = env.step(expert.act(obs))
+    assert active * env.control_timestep / 10 >= fastest

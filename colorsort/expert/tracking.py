@@ -321,16 +321,22 @@ class TrackingExpert(Expert):
     def _move_over_bin(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._arrived(q):
             self.suction = False
-            self._enter(Phase.RELEASE)
+            if self.config.release_time > 0.0:
+                self._enter(Phase.RELEASE)
+            else:  # the seal breaks in the coming physics step: the cup leaves at once, the box falls free
+                self._leave_bin(goal)
 
     def _release(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._released(obs):
-            assert self.current is not None, "RELEASE follows a pick"
-            self.current.cycle.done_at = self.time
-            self.current = None
-            self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
-            self._enter(Phase.MOVE_TO_WAIT)
-            self._intercept_next()  # straight to the next box when one can be met
+            self._leave_bin(goal)
+
+    def _leave_bin(self, goal: np.ndarray) -> None:
+        assert self.current is not None, "a box was carried to the bin"
+        self.current.cycle.done_at = self.time
+        self.current = None
+        self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
+        self._enter(Phase.MOVE_TO_WAIT)
+        self._intercept_next()  # straight to the next box when one can be met
 
     def _start_from_here(self, goal: np.ndarray, tolerance: float) -> None:
         ref, vel, acc = self._current_state()

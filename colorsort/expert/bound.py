@@ -1,0 +1,75 @@
+"""The shortest cycle of a pick on the tracking belt, from the arm's limits and the cell's geometry.
+
+For a box at ``x`` on the belt's centre line and a bin, a cycle is six legs: down onto the box, the
+seal (one control period: the vacuum switch reports it at the next step), the lift, the carry to the
+bin's first drop slot, the release (one control period), and the way back over the next box at the
+same ``x``. Each motion leg takes, between its two joint configurations (mink IK of the cup poses):
+
+- ``speed`` (the bound): the largest joint displacement over that joint's datasheet speed, as if
+  the arm could accelerate at will. No motion of the arm between the two poses is shorter, so no
+  expert's cycle can be: this is the physical bound.
+- ``ruckig`` (a reference): a time-optimal ruckig motion from rest to rest at the datasheet speeds
+  and the expert's acceleration and jerk. An expert that blends legs (it meets a moving box already
+  moving and carries from the moving state) can beat it.
+
+``shortest_cycle`` takes the best ``x`` in the arm's reach window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from colorsort.expert.planning import Waypoint, plan_motion
+from colorsort.expert.tracking import TrackingExpert
+
+LEGS = ("down onto the box", "seal", "lift", "carry to the bin", "release", "back over the next box")
+MODES = ("speed", "ruckig")
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """One reference cycle: where the box is met [m], the bin, and each leg's duration [s] (``LEGS``)."""
+
+    x: float
+    bin: str
+    legs: dict[str, float]
+
+    @property
+    def total(self) -> float:
+        """[s]"""
+        return sum(self.legs.values())
+
+
+def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") -> Cycle:
+    """The cycle for a box at ``x`` [m] on the belt's centre line going to the ``color`` bin (``MODES``)."""
+    if mode not in MODES:
+        raise ValueError(f"mode={mode!r}: valid modes are {list(MODES)}")
+    L, cfg = expert.layout, expert.config
+    top = L.belt_top_z + L.box_size
+    over, on, lift = (Waypoint(name, (x, L.belt_y, z), expert.cup_yaw) for name, z in (
+        ("over the box", top + cfg.approach_gap), ("on the box", top - cfg.press),
+        ("lifted", top + cfg.track_lift_gap)))
+    q_over = expert.ik.solve(over, expert.q_wait)
+    q_on = expert.ik.solve(on, q_over)
+    q_lift = expert.ik.solve(lift, q_on)
+    q_drop = expert.q_drop[color][0]
+
+    vmax = np.asarray(expert.calibration.max_velocity, float)
+
+    def move(a: np.ndarray, b: np.ndarray) -> float:
+        if mode == "speed":
+            return float(np.max(np.abs(b - a) / vmax))
+        return plan_motion(a, b, vmax, cfg.motion).duration
+
+    legs = dict(zip(LEGS, (move(q_over, q_on), expert.dt, move(q_on, q_lift), move(q_lift, q_drop), expert.dt,
+                           move(q_drop, q_over)), strict=True))
+    return Cycle(x, color, legs)
+
+
+def shortest_cycle(expert: TrackingExpert, color: str, mode: str = "speed", step: float = 0.01) -> Cycle:
+    """The shortest cycle for the ``color`` bin over the reach window, the meeting point in ``step`` [m]."""
+    lo, hi = expert.window
+    return min((cycle_at(expert, float(x), color, mode) for x in np.arange(lo, hi + 1e-9, step)),
+               key=lambda c: c.total)

@@ -1,0 +1,76 @@
+"""The tracking expert's cycle against the physical bound: the arm's joint speeds and the cell's geometry.
+
+    python demos/bench_bound.py [--preset tracking-fast] [--seeds 3] [--boxes 20]
+
+Prints, per bin and leg, the shortest cycle (``colorsort.expert.bound``: the box met at the best point
+of the reach window) two ways: the bound (each leg at the datasheet joint speeds, acceleration
+unlimited) and a ruckig reference (rest to rest, with the expert's acceleration and jerk); then the
+expert's measured cycle per phase (``colorsort-sort``'s phase times on the same preset, sim seconds per
+box placed) and the ratio of its active cycle (intercept, track, carry, release) to each, averaged over
+the bins (a box's colour, so its bin, is drawn uniformly).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from colorsort.benchmark.sorting import SortConfig, run_sort
+from colorsort.cell.env import ColorSort
+from colorsort.config import BIN_COLORS
+from colorsort.expert.bound import LEGS, MODES, shortest_cycle
+from colorsort.expert.factory import make_expert
+from colorsort.expert.tracking import TrackingExpert
+from colorsort.results import recorded
+
+ACTIVE = ("intercept box", "track box", "move over bin", "release")  # the expert's phases that a cycle needs
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--preset", default="tracking-fast", choices=["tracking", "tracking-fast"])
+    p.add_argument("--seeds", type=int, default=3)
+    p.add_argument("--boxes", type=int, default=20)
+    args = p.parse_args()
+
+    env = ColorSort(robots="IRB140", preset=args.preset, has_offscreen_renderer=True, use_camera_obs=False,
+                    ignore_done=True, seed=0)
+    env.reset()
+    expert = make_expert(env)
+    assert isinstance(expert, TrackingExpert)
+    cycles = {mode: {c: shortest_cycle(expert, c, mode) for c in BIN_COLORS} for mode in MODES}
+    env.close()
+    m = expert.config.motion
+    print(f"IRB140 on '{args.preset}': the shortest cycle per bin [s], the box met at x on the belt; speed: each leg "
+          f"at the datasheet joint speeds, acceleration unlimited (the bound); ruckig: rest to rest, acceleration "
+          f"{m.acceleration:g} rad/s^2, jerk {m.jerk:g} rad/s^3 (a reference)")
+    columns = [(mode, c) for mode in MODES for c in BIN_COLORS]
+    print("| leg | " + " | ".join(f"{mode}: {c} (x = {cycles[mode][c].x:.2f} m)" for mode, c in columns) + " |")
+    print("| --- |" + " --- |" * len(columns))
+    for leg in LEGS:
+        print(f"| {leg} | " + " | ".join(f"{cycles[mode][c].legs[leg]:.3f}" for mode, c in columns) + " |")
+    print("| all | " + " | ".join(f"{cycles[mode][c].total:.3f}" for mode, c in columns) + " |")
+    mean = {mode: sum(c.total for c in cycles[mode].values()) / len(BIN_COLORS) for mode in MODES}
+
+    phases: dict[str, float] = {}
+    placed = 0
+    for seed in range(args.seeds):
+        report = run_sort(SortConfig(preset=args.preset, boxes=args.boxes, seed=seed), progress=False,
+                          log=lambda _: None)
+        placed += report.correct
+        for phase, seconds in report.phase_seconds.items():
+            phases[phase] = phases.get(phase, 0.0) + seconds
+    print(f"\nthe expert, seeds 0..{args.seeds - 1}, {args.boxes} boxes each: {placed} placed; sim seconds per box "
+          "placed, by phase")
+    print("| phase | seconds | in the active cycle |")
+    print("| --- | --- | --- |")
+    for phase, seconds in sorted(phases.items(), key=lambda kv: -kv[1]):
+        print(f"| {phase} | {seconds / placed:.3f} | {'yes' if phase in ACTIVE else 'no (waiting for a box)'} |")
+    active = sum(phases.get(p, 0.0) for p in ACTIVE) / placed
+    print(f"\nexpert's active cycle {active:.3f} s; the bins' mean: bound {mean['speed']:.3f} s (ratio "
+          f"{active / mean['speed']:.2f}), ruckig reference {mean['ruckig']:.3f} s "
+          f"(ratio {active / mean['ruckig']:.2f})")
+
+
+if __name__ == "__main__":
+    with recorded(__file__):
+        main()
