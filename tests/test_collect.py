@@ -101,6 +101,34 @@ def test_interrupted_run_keeps_finished_episodes_and_resume_completes_it(tiny_da
     assert resumed[len(resumed) - 1]["observation.images.scene"].shape == (3, 64, 64)  # videos joined too
 
 
+def test_ctrl_c_while_an_episode_is_saved_drops_the_shard_and_resume_records_it_again(tiny_dataset, tmp_path,
+                                                                                      monkeypatch):
+    """LeRobot's save_episode takes the frame count out of its buffer first: an interrupt (a Ray cancel) after that
+    leaves a half-written shard, which is dropped (no marker) instead of crashing; --resume records it again."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    out = tmp_path / "ds"
+    save = LeRobotDataset.save_episode
+    calls = {"n": 0}
+
+    def save_cut_short(self, *args, **kwargs):  # the second episode's save is interrupted half-way
+        calls["n"] += 1
+        if calls["n"] == 2:
+            self.writer.episode_buffer.pop("size")
+            raise KeyboardInterrupt
+        return save(self, *args, **kwargs)
+
+    monkeypatch.setattr(LeRobotDataset, "save_episode", save_cut_short)
+    summary = collect(CollectConfig(out=str(out), **TINY), progress=False, log=lambda _: None)
+    assert summary.interrupted and not summary.errors
+    assert not (out / MARKER).exists()  # nothing trustworthy was published
+
+    monkeypatch.setattr(LeRobotDataset, "save_episode", save)
+    summary = collect(CollectConfig(out=str(out), resume=True, **TINY), progress=False, log=lambda _: None)
+    assert summary.kept == 2 and not summary.interrupted
+    assert data_table(out)["sim_state"] == data_table(tiny_dataset)["sim_state"]  # same as one straight run
+
+
 def test_same_seeds_give_the_same_data_whatever_the_worker_count(tiny_dataset, tmp_path):
     out = tmp_path / "two_workers"
     summary = collect(CollectConfig(out=str(out), workers=2, **TINY), progress=False, log=lambda _: None)

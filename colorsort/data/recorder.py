@@ -46,6 +46,7 @@ class ShardReport:
     kept: list[int] = field(default_factory=list)  # episode numbers saved, in order
     failed: dict[str, str] = field(default_factory=dict)  # episode number -> why it was not kept
     interrupted: bool = False
+    incomplete: bool = False  # the interrupt cut an episode's save short: the shard's files cannot be trusted
     error: str | None = None
     seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(STAGES, 0.0))
     sim_state: dict | None = None  # the sim-state layout of its env (``SimStateLayout.describe``)
@@ -142,8 +143,16 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     except Exception:  # noqa: BLE001 - reported to the caller, finished episodes are still saved
         out.error = traceback.format_exc()
     finally:
-        if dataset.has_pending_frames():
+        try:
+            pending = dataset.has_pending_frames()
+        except KeyError:  # save_episode takes "size" out of the buffer first: the interrupt came while it saved
+            out.incomplete = pending = True
+        if pending:
             dataset.clear_episode_buffer()  # the episode under way is not saved
-        dataset.finalize()
+        try:
+            dataset.finalize()
+        except Exception:  # noqa: BLE001 - after a cut-short save the files are dropped anyway
+            if not out.incomplete:
+                raise
         env.close()
     return out

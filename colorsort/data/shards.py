@@ -62,6 +62,9 @@ def record(job: ShardJob, ctx: TaskContext) -> ShardReport:
     worker.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid(), "attempt": attempt,
                                   "started": time.time()}))
     report = record_shard(job.config, list(job.indices), root, ctx.send, ctx.stopping)
+    if report.incomplete:  # no marker: the shard counts as unfinished and --resume records it again
+        shutil.rmtree(root, ignore_errors=True)
+        return report
     record_ = {"run": job.run, "settings": job.config.settings(), "indices": list(job.indices),
                **{k: v for k, v in asdict(report).items() if k != "root"}}
     tmp = root / (SHARD_MARKER + ".tmp")

@@ -8,6 +8,10 @@ same ``x``. Each motion leg takes, between its two joint configurations (mink IK
 - ``speed`` (the bound): the largest joint displacement over that joint's datasheet speed, as if
   the arm could accelerate at will. No motion of the arm between the two poses is shorter, so no
   expert's cycle can be: this is the physical bound.
+- ``stops`` (the bound with acceleration): the cup is at rest on the box (a standing box) and over
+  the bin at the release, and moves freely through the other two points: each leg is the least time
+  to start from or come to rest there, per joint, at the datasheet speeds and the expert's
+  acceleration (``time_to_stop``), jerk unlimited. A motion that stops where it stops can do no better.
 - ``ruckig`` (a reference): a time-optimal ruckig motion from rest to rest at the datasheet speeds
   and the expert's acceleration and jerk. An expert that blends legs (it meets a moving box already
   moving and carries from the moving state) can beat it.
@@ -25,7 +29,15 @@ from colorsort.expert.planning import Waypoint, plan_motion
 from colorsort.expert.tracking import TrackingExpert
 
 LEGS = ("down onto the box", "seal", "lift", "carry to the bin", "release", "back over the next box")
-MODES = ("speed", "ruckig")
+MODES = ("speed", "stops", "ruckig")
+
+
+def time_to_stop(d: np.ndarray, vmax: np.ndarray, a: float) -> np.ndarray:
+    """[s] per joint: the least time to move ``d`` [rad] and be at rest at the end (or to start from rest),
+    the other end's velocity free, at speeds up to ``vmax`` [rad/s] and accelerations up to ``a`` [rad/s^2]."""
+    d = np.abs(d)
+    cruise = d >= vmax**2 / (2 * a)
+    return np.where(cruise, d / vmax + vmax / (2 * a), np.sqrt(2 * d / a))
 
 
 @dataclass(frozen=True)
@@ -61,6 +73,8 @@ def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") 
     def move(a: np.ndarray, b: np.ndarray) -> float:
         if mode == "speed":
             return float(np.max(np.abs(b - a) / vmax))
+        if mode == "stops":
+            return float(np.max(time_to_stop(b - a, vmax * cfg.motion.speed_factor, cfg.motion.acceleration)))
         return plan_motion(a, b, vmax, cfg.motion).duration
 
     legs = dict(zip(LEGS, (move(q_over, q_on), expert.dt, move(q_on, q_lift), move(q_lift, q_drop), expert.dt,
