@@ -19,7 +19,7 @@ $(STAMP): setup.py pyproject.toml overrides.txt $(PLUGIN)/pyproject.toml
 	$(VENV)/bin/python -c 'import sys; sys.exit(sys.version_info < (3, 12))' 2>/dev/null || rm -rf $(VENV)
 	test -x $(VENV)/bin/python || $(PY) -m venv $(VENV)
 	$(VENV)/bin/python -m pip install --quiet --upgrade pip uv
-	$(VENV)/bin/uv pip install --python $(VENV)/bin/python --compile-bytecode -e ".[dev]" -e $(PLUGIN) \
+	$(VENV)/bin/uv pip install --python $(VENV)/bin/python --compile-bytecode -e ".[dev,viz,diffusion]" -e $(PLUGIN) \
 		--override overrides.txt
 	touch $(STAMP)
 

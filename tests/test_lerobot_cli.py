@@ -23,21 +23,27 @@ from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
 pytestmark = pytest.mark.slow  # LeRobot's CLIs in fresh processes
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-PAGES = (DOCS / "benchmark.md", DOCS / "data.md")  # the pages that show LeRobot's commands
+PAGES = (DOCS / "benchmark.md", DOCS / "data.md", DOCS / "baselines.md")  # the pages that show LeRobot's commands
 BIN = Path(sys.executable).parent
 
 
-def documented_command(program: str) -> list[str]:
-    """The docs' first shell command that runs ``program``, continuation lines joined, as argv."""
+def documented_command(program: str, containing: str = "") -> list[str]:
+    """The docs' first shell command that runs ``program`` (and holds ``containing``), continuation lines
+    joined, as argv."""
     text = "\n".join(page.read_text() for page in PAGES).replace("\\\n", " ")
-    line = next(line for line in text.splitlines() if re.search(rf"(^|\s){program}\s", line))
+    line = next(line for line in text.splitlines() if re.search(rf"(^|\s){program}\s", line) and containing in line)
     argv = shlex.split(line)
     env_assignments = [a for a in argv[: argv.index(program)] if "=" in a]
-    assert env_assignments == ["HF_HUB_OFFLINE=1"], f"the docs' {program} command sets {env_assignments}"
+    wanted = ["HF_HUB_OFFLINE=1"] if program.startswith("lerobot") else []
+    assert env_assignments == wanted, f"the docs' {program} command sets {env_assignments}"
     return argv[argv.index(program):]
 
 
 def replace_flag(argv: list[str], flag: str, value: str) -> list[str]:
+    """``argv`` with ``flag=...`` (LeRobot's form) or ``flag ...`` (argparse's) set to ``value``."""
+    if flag in argv:
+        k = argv.index(flag)
+        return argv[: k + 1] + [value] + argv[k + 2:]
     assert any(a.startswith(f"{flag}=") for a in argv), f"the docs' command has no {flag}"
     return [f"{flag}={value}" if a.startswith(f"{flag}=") else a for a in argv]
 
@@ -100,6 +106,7 @@ def test_colorsort_env_type_is_found_by_lerobots_plugin_discovery():
 
 @pytest.mark.parametrize("gym_id", [DEFAULT_GYM_ID] + [v.gym_id for v in VARIANTS.values()])
 def test_every_variant_builds_and_steps_through_lerobots_make_env(gym_id):
+    from lerobot.configs.types import FeatureType
     from lerobot.envs.factory import make_env
     from lerobot.envs.utils import preprocess_observation
 
@@ -113,7 +120,7 @@ def test_every_variant_builds_and_steps_through_lerobots_make_env(gym_id):
         if key == "action":
             continue
         shape = tuple(batch[cfg.features_map[key]].shape[1:])
-        h, w, c = feature.shape if key.startswith("pixels/") else (None, None, None)
+        h, w, c = feature.shape if feature.type is FeatureType.VISUAL else (None, None, None)
         assert shape == ((c, h, w) if c else feature.shape), (key, shape)  # images arrive channel-first
     assert envs.single_action_space.shape == cfg.features["action"].shape
     for _ in range(3):
@@ -203,3 +210,57 @@ def test_documented_command_makes_a_state_only_copy_of_a_dataset_with_cameras(ti
     last = len(original) - 1
     for key in ("observation.state", "observation.environment_state", "action"):
         assert np.array_equal(state_only[last][key].numpy(), original[last][key].numpy())
+
+
+def test_lerobot_eval_records_rollouts_as_datasets_that_colorsort_replay_explains(readme_checkpoint):
+    """The docs' recorded lerobot-eval, 2 episodes of 30 steps: a LeRobot dataset per env of the batch."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    argv = replace_flag(documented_command("lerobot-eval", "--eval.recording=true"), "--eval.n_episodes", "2")
+    done = run(argv + ["--env.episode_length=30"], readme_checkpoint, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    root = readme_checkpoint / "outputs/eval/recorded/recordings/colorsort_0"
+    for i in range(2):
+        ds = LeRobotDataset(f"eval_recording_env_{i}", root=root / f"env_{i}", video_backend="pyav")
+        assert ds.num_episodes == 1 and ds.num_frames == 30
+        last = ds[len(ds) - 1]
+        assert tuple(last["observation.images.scene"].shape) == (3, 128, 128)
+        assert tuple(last["agent_pos"].shape) == (23,) and tuple(last["action"].shape) == (8,)
+        assert bool(last["next.done"]) and not bool(last["next.success"])
+    replay = run(["colorsort-replay", str(root / "env_0")], readme_checkpoint, timeout=300)
+    assert replay.returncode == 2 and "evaluation recording" in replay.stderr and "lerobot-dataset-viz" in replay.stderr
+    assert len(replay.stderr.strip().splitlines()) == 1  # one line, no traceback
+
+
+def test_lerobot_dataset_viz_saves_an_rrd_of_a_colorsort_dataset(tiny_dataset, tmp_path):
+    """The docs' lerobot-dataset-viz command (the viz extra) on a small dataset: Rerun reads the .rrd back."""
+    from rerun.experimental import RrdReader
+
+    argv = replace_flag(documented_command("lerobot-dataset-viz"), "--root", str(tiny_dataset))
+    argv = replace_flag(argv, "--repo-id", "local/colorsort")
+    done = run(argv, tmp_path, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    rrd = tmp_path / "outputs" / "viz" / "local_colorsort_episode_0.rrd"
+    assert rrd.stat().st_size > 10_000
+    paths = set(RrdReader(str(rrd)).store().schema().entity_paths())
+    assert {"/observation.images.scene", "/observation.images.wrist", "/action", "/state"} <= paths
+
+
+def test_lerobot_trains_a_diffusion_policy_on_colorsort_that_colorsort_eval_runs(tmp_path):
+    """The docs' diffusion commands (the diffusion extra) in small: 2 demos, 2 updates, one short episode."""
+    collect = replace_flag(documented_command("colorsort-collect", "--cameras none"), "--episodes", "2")
+    done = run(replace_flag(collect, "--boxes-per-episode", "1"), tmp_path, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    train = replace_flag(documented_command("lerobot-train", "--policy.type=diffusion"), "--steps", "2")
+    done = run(replace_flag(train, "--batch_size", "2"), tmp_path, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    config = json.loads((tmp_path / "outputs/train/diffusion-state/checkpoints/last/pretrained_model/config.json")
+                        .read_text())
+    assert config["type"] == "diffusion" and config["down_dims"] == [128, 256]
+    assert "observation.environment_state" in config["input_features"]
+    evaluate_cmd = documented_command("colorsort-eval", "diffusion-state")
+    done = run(replace_flag(evaluate_cmd, "--episodes", "1") + ["--episode-length", "30", "--json", "eval.json"],
+               tmp_path, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads((tmp_path / "eval.json").read_text())
+    assert result["episodes"] == 1 and result["per_episode"][0]["steps"] == 30

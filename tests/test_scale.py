@@ -16,7 +16,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from colorsort.benchmark.evaluate import evaluate
+from colorsort.benchmark.evaluate import evaluate, run_evaluation
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
 from colorsort.data.store import MARKER, SHARD_MARKER
@@ -176,6 +176,16 @@ def test_evaluation_on_ray_gives_the_same_numbers_as_local(cluster):
     local = evaluate("expert", "default", **kwargs, envs=1)
     spread = evaluate("expert", "default", **kwargs, executor=ExecutorConfig("ray", 2), shard_size=1)
     assert local.successes == 3 and local == spread
+
+
+def test_a_filmed_evaluation_on_ray_films_each_episode_where_it_runs(cluster):
+    kwargs = dict(episodes=2, image_size=(32, 32), cameras=("scene",), progress=False, episode_length=30)
+    local = run_evaluation("expert", ["default"], **kwargs)
+    spread = run_evaluation("expert", ["default"], **kwargs, executor=ExecutorConfig("ray", 2), shard_size=1,
+                            film=True)
+    assert local.reports == spread.reports
+    assert sorted(spread.films) == [("default", 10000), ("default", 10001)]
+    assert all(video[4:8] == b"ftyp" for video in spread.films.values())  # mp4 files
 
 
 def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_command(tmp_path):

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from colorsort.benchmark.filming import EpisodeFilm
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
@@ -46,6 +47,7 @@ class EvalSettings:
     image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE  # (height, width) [px]
     cameras: tuple[str, ...] = DEFAULT_CAMERAS
     episode_length: int | None = None  # steps before truncation; None: the variant's time limit
+    film: bool = False  # film every episode (``filming.py``): its mp4 bytes under "video" in its result
 
 
 # torch threads of a learned policy in each env's process: with torch's default (one per core) envs
@@ -64,9 +66,10 @@ class _Runner:
             self.threads_before = torch.get_num_threads()
             torch.set_num_threads(POLICY_THREADS)
         self.policy = make_policy(settings.policy)
+        self.film = settings.film
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
                                    image_size=settings.image_size, episode_length=settings.episode_length,
-                                   render_mode=None)
+                                   render_mode="rgb_array" if settings.film else None)  # a GL context to film with
 
     def close(self) -> None:
         """Close the env; give this process back the torch threads it had (it may be the caller's)."""
@@ -77,14 +80,31 @@ class _Runner:
             torch.set_num_threads(self.threads_before)
 
     def episode(self, seed: int) -> dict:
+        """Run the episode of ``seed``: its figures, how it ended, each box's outcome (and its film)."""
         obs, info = self.env.reset(seed=seed)
         self.policy.reset(self.env, seed)
-        terminated = truncated = False
-        while not (terminated or truncated):
-            obs, _, terminated, truncated, info = self.env.step(self.policy.act(obs))
-        return {"seed": seed, "success": bool(info["is_success"]), "steps": self.env.steps,
-                **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through", "distractors", "sim_time",
-                                        "sorted_times")}}
+        film = EpisodeFilm(self.env) if self.film else None
+        try:
+            if film is not None:
+                film.add(getattr(self.policy, "phase", None))
+            terminated = truncated = False
+            while not (terminated or truncated):
+                obs, _, terminated, truncated, info = self.env.step(self.policy.act(obs))
+                if film is not None:
+                    film.add(getattr(self.policy, "phase", None))
+        except BaseException:
+            if film is not None:
+                film.discard()
+            raise
+        ended = "success" if info["is_success"] else "failed" if info["failed"] else "time limit"
+        boxes = [{"time": e.time, "color": e.color, "outcome": e.outcome.value, "bin": e.bin}
+                 for e in self.env.env.events[: self.env.variant.boxes]]
+        result = {"seed": seed, "success": bool(info["is_success"]), "ended": ended, "steps": self.env.steps,
+                  **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through", "distractors", "sim_time",
+                                          "sorted_times")}, "boxes": boxes}
+        if film is not None:
+            result["video"] = film.finish()
+        return result
 
 
 PRELOAD = ("colorsort.benchmark.evaluate",)  # what worker processes import once, before they fork
@@ -140,26 +160,49 @@ def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(
     return [r.value for r in results], sum(r.attempts > 1 for r in results)
 
 
-def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int, *, seed: int | None = None,
-                      image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, cameras: tuple[str, ...] = DEFAULT_CAMERAS,
-                      progress: bool = True, episode_length: int | None = None,
-                      executor: ExecutorConfig = ExecutorConfig(),
-                      shard_size: int = DEFAULT_SHARD_SIZE) -> list[EvalReport]:
+@dataclass(frozen=True)
+class Evaluation:
+    """The reports of an evaluation, one per variant in order, and the films of its episodes."""
+
+    reports: list[EvalReport]
+    films: dict[tuple[str, int], bytes]  # (variant, seed) -> H.264 mp4; empty unless filmed
+
+
+def run_evaluation(policy_spec: str, variant_names: list[str], episodes: int, *, seed: int | None = None,
+                   image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, cameras: tuple[str, ...] = DEFAULT_CAMERAS,
+                   progress: bool = True, episode_length: int | None = None,
+                   executor: ExecutorConfig = ExecutorConfig(), shard_size: int = DEFAULT_SHARD_SIZE,
+                   film: bool = False) -> Evaluation:
     """``episodes`` episodes of a policy on each variant, all spread over ``executor`` in jobs of at most
-    ``shard_size`` episodes; one report per variant, in order."""
+    ``shard_size`` episodes; with ``film``, every episode is filmed in the process that runs it."""
     check_policy_spec(policy_spec)
     variants = [get_variant(name) for name in variant_names]
     path = policy_spec if policy_spec in ("expert", "random") else str(Path(policy_spec).resolve())  # for any worker
     jobs, owner = [], []
     per_variant = max(1, executor.workers // len(variants))  # jobs per variant that keep every worker busy
     for k, variant in enumerate(variants):
-        settings = EvalSettings(path, variant.name, (image_size[0], image_size[1]), tuple(cameras), episode_length)
+        settings = EvalSettings(path, variant.name, (image_size[0], image_size[1]), tuple(cameras), episode_length,
+                                film)
         for block in chunks(episode_seeds(variant, episodes, seed), shard_size, per_variant):
             jobs.append(EvalJob(settings, tuple(block)))
             owner.append(k)
     results, _ = run_episodes(jobs, executor, progress, desc=f"{policy_spec} on {', '.join(variant_names)}")
+    films = {(job.settings.variant, r["seed"]): r.pop("video") for job, rs in zip(jobs, results, strict=True)
+             for r in rs if "video" in r}
     per = [[r for job, rs in zip(owner, results, strict=True) if job == k for r in rs] for k in range(len(variants))]
-    return [aggregate(str(policy_spec), v.name, rs) for v, rs in zip(variants, per, strict=True)]
+    reports = [aggregate(str(policy_spec), v.name, rs) for v, rs in zip(variants, per, strict=True)]
+    return Evaluation(reports, films)
+
+
+def evaluate_variants(policy_spec: str, variant_names: list[str], episodes: int, *, seed: int | None = None,
+                      image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, cameras: tuple[str, ...] = DEFAULT_CAMERAS,
+                      progress: bool = True, episode_length: int | None = None,
+                      executor: ExecutorConfig = ExecutorConfig(),
+                      shard_size: int = DEFAULT_SHARD_SIZE) -> list[EvalReport]:
+    """``run_evaluation``'s reports, one per variant, in order (no films)."""
+    return run_evaluation(policy_spec, variant_names, episodes, seed=seed, image_size=image_size, cameras=cameras,
+                          progress=progress, episode_length=episode_length, executor=executor,
+                          shard_size=shard_size).reports
 
 
 def evaluate(policy_spec: str, variant_name: str, episodes: int, *, seed: int | None = None,

@@ -63,10 +63,12 @@ class ColorSortEnv(EnvConfig):
             "environment_state": PolicyFeature(type=FeatureType.ENV, shape=(ENV_STATE_SIZE,)),
         }
         self.features_map = {ACTION: ACTION, "agent_pos": OBS_STATE, "environment_state": OBS_ENV_STATE}
+        # Cameras under the policy's own key, not LeRobot's usual "pixels/<camera>": lerobot-eval's
+        # --eval.recording=true makes a dataset feature of each env feature, and those may not hold "/".
         for cam in self.camera_list:
-            key = f"pixels/{cam}"
+            key = f"{OBS_IMAGES}.{cam}"
             self.features[key] = PolicyFeature(type=FeatureType.VISUAL, shape=(self.image_size, self.image_size, 3))
-            self.features_map[key] = f"{OBS_IMAGES}.{cam}"
+            self.features_map[key] = key
 
     @property
     def camera_list(self) -> tuple[str, ...]:

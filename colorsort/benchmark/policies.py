@@ -42,6 +42,11 @@ class ExpertPolicy:
     def act(self, obs: dict[str, Any]) -> np.ndarray:
         return self.expert.act(self.env.raw_obs).astype(np.float32)
 
+    @property
+    def phase(self) -> str:
+        """The expert's phase now (filmed evaluations write it on the frame)."""
+        return self.expert.phase.value
+
 
 class RandomPolicy:
     """Actions drawn uniformly from the action space, from a generator seeded per episode."""

@@ -17,7 +17,7 @@ from tqdm import tqdm
 from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sorting_time_limit
-from colorsort.data.video import VideoWriter, contact_sheet, save_png
+from colorsort.data.video import VideoWriter, contact_sheet, draw_lines, save_png
 from colorsort.expert.base import Expert
 from colorsort.expert.factory import make_expert
 from colorsort.robots import get_robot
@@ -160,16 +160,9 @@ def _box_at_sensor(env: ColorSort) -> int | None:
 
 def _overlay(frame: np.ndarray, expert: Expert, env: ColorSort) -> np.ndarray:
     """The frame with the expert's phase, the colour it saw and the bins' counts written on it."""
-    out = frame.copy()
     counts = env.task_info()["bins"]
-    lines = [
+    return draw_lines(frame, [
         f"t {env.cur_time:6.1f} s  phase: {expert.phase.value}",
         f"seen: {expert.seen_color or '-'}",
         "bins: " + "  ".join(f"{c} {counts[c]['count']}" for c in BIN_COLORS),
-    ]
-    scale = out.shape[0] / 480
-    for i, text in enumerate(lines):
-        org = (int(10 * scale), int((24 + 22 * i) * scale))
-        cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * scale, (0, 0, 0), 3, cv2.LINE_AA)
-        cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * scale, (255, 255, 255), 1, cv2.LINE_AA)
-    return out
+    ])

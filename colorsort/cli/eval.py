@@ -5,6 +5,7 @@ Example::
     colorsort-eval --policy expert --variant default --episodes 50 --envs 2 --json outputs/eval.json
     colorsort-eval --policy outputs/train/act/checkpoints/last/pretrained_model --variant jitter --episodes 20
     colorsort-eval --policy expert --variant all --episodes 50 --executor ray --envs 8
+    colorsort-eval --policy baselines/act-state --variant distractors --episodes 10 --report outputs/report
     colorsort-eval --list
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` + k), so the same
@@ -18,6 +19,10 @@ Metrics: success rate (every box of the episode where it belongs, none misplaced
 distractors (boxes with no bin) let through; boxes per minute (boxes handled right, placed in
 their bin or let through, per minute of sim time); mean cycle time (sim time between consecutive
 boxes handled right).
+``--report DIR`` writes a page that a browser opens from disk (``DIR/index.html``): success per
+variant, every episode's boxes, failures first, with a video of the scene camera per filmed
+episode (``--videos N`` per variant, failures first; default every failure and 3 successes),
+and ``DIR/report.json`` (what ``--json`` writes). Filming changes no result.
 Exit status 0 when it ran, 1 when it failed or was interrupted, 2 for bad arguments.
 """
 
@@ -25,13 +30,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
+import shutil
 import sys
 from dataclasses import asdict
 from pathlib import Path
 
-from colorsort.benchmark.evaluate import evaluate_variants, observation_settings
+from colorsort.benchmark.evaluate import observation_settings, run_evaluation
 from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
+from colorsort.benchmark.report_page import SUCCESSES_FILMED, choose_films, write_report
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, EXECUTORS, ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
 from colorsort.variants import VARIANTS, get_variant
@@ -62,6 +70,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="episodes per job, at most (fewer where that keeps every worker busy)")
     parser.add_argument("--retries", type=int, default=2, help="times a job runs again after its process died")
     parser.add_argument("--json", default=None, help="write the metrics as JSON here")
+    parser.add_argument("--report", default=None,
+                        help="write a report page here: DIR/index.html, its videos and DIR/report.json")
+    parser.add_argument("--videos", type=int, default=None,
+                        help="--report: episodes filmed per variant, failures first (default: every failure and "
+                             f"{SUCCESSES_FILMED} successes; 0: none)")
+    parser.add_argument("--overwrite", action="store_true", help="--report: replace an existing report folder")
     parser.add_argument("--list", action="store_true", help="print the variants, one per line, and exit")
     args = parser.parse_args(argv)
     if args.list:
@@ -72,25 +86,41 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--episodes {args.episodes}: give at least 1")
     if args.envs < 1:
         parser.error(f"--envs {args.envs}: give at least 1")
+    if args.videos is not None and args.videos < 0:
+        parser.error(f"--videos {args.videos}: give 0 or more")
+    if args.videos is not None and args.report is None:
+        parser.error("--videos: films go into a report; give --report DIR")
+    if args.report and Path(args.report).exists() and any(Path(args.report).iterdir()) and not args.overwrite:
+        parser.error(f"--report {args.report} exists and is not empty; pass --overwrite to replace it")
     try:
         executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
         cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
         names = variant_names(args.policy, args.variant)
-        reports = evaluate_variants(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
+        film = args.report is not None and args.videos != 0
+        evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
                                     cameras=cameras, episode_length=args.episode_length, executor=executor,
-                                    shard_size=args.shard_size)
+                                    shard_size=args.shard_size, film=film)
     except ValueError as err:
         print(f"colorsort-eval: error: {err}", file=sys.stderr)
         return 2
     except RuntimeError as err:
         print(f"colorsort-eval: {err}", file=sys.stderr)
         return 1
+    reports = evaluation.reports
     print(format_report(reports[0]) if args.variant != "all" else f"policy {args.policy}\n" + format_table(reports))
+    found = [asdict(r) for r in reports]
+    payload = found if args.variant == "all" else found[0]
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        found = [asdict(r) for r in reports]
-        Path(args.json).write_text(json.dumps(found if args.variant == "all" else found[0], indent=1))
+        Path(args.json).write_text(json.dumps(payload, indent=1))
         print(f"metrics: {args.json}")
+    if args.report:
+        if args.overwrite:
+            shutil.rmtree(args.report, ignore_errors=True)
+        kept = choose_films(reports, evaluation.films, args.videos)
+        command = shlex.join(["colorsort-eval", *(sys.argv[1:] if argv is None else argv)])
+        page = write_report(args.report, reports, kept, payload, command)
+        print(f"report: {page} ({len(kept)} videos)")
     return 0
 
 

@@ -52,7 +52,7 @@ def load_episode(root: str | Path, index: int, repo_id: str | None = None) -> Re
     root = Path(root)
     marker_path = root / MARKER
     if not marker_path.is_file():
-        raise ValueError(f"{root} is not a ColorSort dataset (no {MARKER})")
+        raise ValueError(not_replayable(root))
     marker = json.loads(marker_path.read_text())
     settings, layout = marker["settings"], marker.get("sim_state")  # no layout: recorded before it was stored
     if layout is not None and layout["version"] != sim_state.VERSION:
@@ -65,6 +65,24 @@ def load_episode(root: str | Path, index: int, repo_id: str | None = None) -> Re
     return RecordedEpisode(root, index, settings, np.stack(ds[SIM_STATE]).astype(np.float64),
                            np.stack(ds[ACTION]).astype(np.float32), np.stack(ds[STATE]).astype(np.float32),
                            np.stack(ds[ENV_STATE]).astype(np.float32), meta.episodes[index]["tasks"][0])
+
+
+def not_replayable(root: Path) -> str:
+    """Why the folder ``root`` (with no ColorSort marker) cannot be replayed, and what opens it instead."""
+    info = root / "meta" / "info.json"
+    recordings = sorted(p.name for p in root.glob("*/meta/info.json") for p in [p.parent.parent])
+    if info.is_file() and "next.success" in json.loads(info.read_text()).get("features", {}):
+        return (f"{root} is a LeRobot evaluation recording (lerobot-eval --eval.recording=true): it holds the "
+                "policy's observations, actions, rewards and success, but not the simulator states that "
+                "colorsort-replay restores and re-renders, nor the episodes' seeds. Watch it with "
+                f"lerobot-dataset-viz --repo-id local/eval --root {root} --episode-index 0 --save 1 "
+                "--output-dir outputs/viz (the viz extra), or film an evaluation with colorsort-eval --report DIR")
+    if info.is_file():
+        return (f"{root} is a LeRobot dataset but not one colorsort-collect recorded (no {MARKER}): it has no "
+                "simulator states to replay; lerobot-dataset-viz shows its frames")
+    if recordings:
+        return f"{root} holds no dataset itself; the datasets under it: {recordings}"
+    return f"{root} is not a ColorSort dataset (no {MARKER})"
 
 
 def _metadata(repo_id: str, root: Path):

@@ -70,6 +70,19 @@ def save_png(path: str | Path, frame: np.ndarray) -> None:
         raise OSError(f"could not write {path}")
 
 
+def draw_lines(frame: np.ndarray, lines: list[str | tuple[str, tuple[int, int, int]]]) -> np.ndarray:
+    """A copy of an RGB frame with ``lines`` of text at its top left, outlined so that they read on any
+    background; a line is a string (white) or ``(text, rgb)``. The text scales with the frame's height."""
+    out = frame.copy()
+    scale = out.shape[0] / 480
+    for i, line in enumerate(lines):
+        text, color = (line, (255, 255, 255)) if isinstance(line, str) else line
+        org = (int(10 * scale), int((24 + 22 * i) * scale))
+        cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * scale, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * scale, color, 1, cv2.LINE_AA)
+    return out
+
+
 def read_video(path: str | Path) -> np.ndarray:
     """Decode an mp4 into RGB frames, shape (T, H, W, 3) uint8."""
     with av.open(str(path)) as container:
