@@ -27,24 +27,30 @@ demo: $(STAMP)
 	$(VENV)/bin/colorsort-sort --boxes 6 --seed 0 --video outputs/sort.mp4 --json outputs/sort.json
 	$(VENV)/bin/colorsort-collect --episodes 4 --out datasets/demo --repo-id local/colorsort-demo --overwrite
 	$(VENV)/bin/colorsort-replay datasets/demo --episode 0 --size 480x640 --video outputs/demo_episode0.mp4
-	$(VENV)/bin/colorsort-eval --policy expert --variant default --episodes 3 --json outputs/eval_expert_default.json
+	$(VENV)/bin/colorsort-eval --policy expert --variant default --episodes 3 --json outputs/eval_expert_default.json \
+		--report outputs/eval_expert_default --overwrite
 	@echo
 	@echo "demo outputs:"
 	@echo "  outputs/sort.mp4, outputs/sort.png    the expert sorting 6 boxes (video, contact sheet), outputs/sort.json"
 	@echo "  datasets/demo/                        a LeRobot v3.0 dataset of 4 pick-and-place episodes"
 	@echo "  outputs/demo_episode0.mp4, .png       its episode 0 replayed from the stored states at 640x480"
 	@echo "  outputs/eval_expert_default.json      the expert on the benchmark's default variant (3 episodes)"
+	@echo "  outputs/eval_expert_default/index.html  the same as a page to open in a browser, a video per episode"
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/mypy
 
+# two pytest workers (the machines have 2 cores and many tests wait on subprocesses); --dist loadfile keeps each
+# module in one worker, so module fixtures are built once and only one Ray cluster runs at a time
+PYTEST := $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
+
 test: lint
-	$(VENV)/bin/python -m pytest -q tests
+	$(PYTEST) tests
 
 # the tests not marked slow (pytest.ini says which those are)
 test-fast: lint
-	$(VENV)/bin/python -m pytest -q -m "not slow" tests
+	$(PYTEST) -m "not slow" tests
 
 bench: $(STAMP)
 	@# each writes what it prints to docs/results/<script>_<arguments>.md, which the docs pages link

@@ -35,7 +35,8 @@ INSTALL_REQUIRES = [
 EXTRAS_REQUIRE = {
     # playwright drives a system Chromium (Debian's `chromium`) in the report page's browser test; it downloads
     # no browser of its own unless `playwright install` is run
-    "dev": ["pytest>=8", "build>=1.2", "ruff>=0.17.6,<0.18", "mypy>=2.4,<2.5", "playwright>=1.50,<2"],
+    "dev": ["pytest>=8", "build>=1.2", "ruff>=0.17.6,<0.18", "mypy>=2.4,<2.5", "playwright>=1.50,<2",
+            "pytest-xdist>=3.6,<4"],
     # lerobot-dataset-viz (Rerun) on ColorSort's datasets
     "viz": ["lerobot[viz]>=0.6.1,<0.7"],
     # LeRobot's diffusion policy (diffusers), e.g. lerobot-train --policy.type=diffusion

@@ -74,15 +74,12 @@ def newest_eval_info(work: Path) -> dict:
     return json.loads(newest.read_text())["overall"]
 
 
-@pytest.mark.parametrize("batch_size,use_async,discover", [(2, None, False), (2, "false", True)],
-                         ids=["batch2-async", "batch2-sync-discover-flag"])
-def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint, batch_size, use_async, discover):
+def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint):
+    """Two full episodes in LeRobot's default asynchronous vector env (the synchronous one, with the pre-0.6
+    --env.discover_packages_path, runs in the recorded evaluation's test)."""
+    batch_size = 2
     argv = replace_flag(documented_command("lerobot-eval"), "--eval.n_episodes", str(batch_size))
     argv = replace_flag(argv, "--eval.batch_size", str(batch_size))
-    if use_async is not None:
-        argv.append(f"--eval.use_async_envs={use_async}")
-    if discover:
-        argv.insert(1, "--env.discover_packages_path=colorsort")  # the pre-0.6 way keeps working
     done = run(argv, readme_checkpoint, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     summary = newest_eval_info(readme_checkpoint)
@@ -213,11 +210,13 @@ def test_documented_command_makes_a_state_only_copy_of_a_dataset_with_cameras(ti
 
 
 def test_lerobot_eval_records_rollouts_as_datasets_that_colorsort_replay_explains(readme_checkpoint):
-    """The docs' recorded lerobot-eval, 2 episodes of 30 steps: a LeRobot dataset per env of the batch."""
+    """The docs' recorded lerobot-eval, 2 episodes of 30 steps in LeRobot's synchronous vector env (found through
+    --env.discover_packages_path): a LeRobot dataset per env of the batch."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     argv = replace_flag(documented_command("lerobot-eval", "--eval.recording=true"), "--eval.n_episodes", "2")
-    done = run(argv + ["--env.episode_length=30"], readme_checkpoint, timeout=600)
+    argv.insert(1, "--env.discover_packages_path=colorsort")  # the pre-0.6 way keeps working
+    done = run(argv + ["--env.episode_length=30", "--eval.use_async_envs=false"], readme_checkpoint, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     root = readme_checkpoint / "outputs/eval/recorded/recordings/colorsort_0"
     for i in range(2):

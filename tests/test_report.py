@@ -24,7 +24,7 @@ SHORT = ["--episodes", "2", "--episode-length", "120"]  # in place of the docume
 def documented_report_command() -> list[str]:
     """The ``--report`` command docs/benchmark.md shows."""
     text = (ROOT / "docs" / "benchmark.md").read_text()
-    (line,) = [ln for ln in text.splitlines() if ln.startswith("colorsort-eval ") and "--report" in ln]
+    (line,) = [ln for ln in text.splitlines() if ln.startswith("colorsort-eval ") and "--report outputs/" in ln]
     return shlex.split(line)
 
 
