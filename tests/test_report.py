@@ -42,7 +42,7 @@ def eval_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("policy", ["expert", str(STATE_POLICY)], ids=["expert", "state-policy"])
-def test_filming_changes_no_result_and_films_every_step(policy):
+def test_filming_changes_no_result_and_films_every_step(policy, tmp_path):
     kwargs = dict(episodes=2, cameras=(), image_size=(64, 64), progress=False, episode_length=60)
     if policy == "expert":
         kwargs["cameras"] = ("scene", "wrist")
@@ -51,7 +51,7 @@ def test_filming_changes_no_result_and_films_every_step(policy):
     assert [asdict(r) for r in plain.reports] == [asdict(r) for r in filmed.reports]
     assert not plain.films and sorted(filmed.films) == [("default", 10000), ("default", 10001)]
     episode = filmed.reports[0].per_episode[0]
-    path = Path(__import__("tempfile").mkdtemp()) / "film.mp4"
+    path = tmp_path / "film.mp4"
     path.write_bytes(filmed.films[("default", 10000)])
     frames = read_video(path)
     assert frames.shape == (episode["steps"] + 1, 360, 480, 3)  # the reset and every step

@@ -20,6 +20,7 @@ from colorsort.benchmark.evaluate import evaluate, run_evaluation
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
 from colorsort.data.store import MARKER, SHARD_MARKER
+from colorsort.data.video import read_video
 from colorsort.executors.base import ExecutorConfig
 
 pytestmark = pytest.mark.slow  # Ray clusters, killed workers, interrupted runs
@@ -178,14 +179,16 @@ def test_evaluation_on_ray_gives_the_same_numbers_as_local(cluster):
     assert local.successes == 3 and local == spread
 
 
-def test_a_filmed_evaluation_on_ray_films_each_episode_where_it_runs(cluster):
+def test_a_filmed_evaluation_on_ray_films_each_episode_where_it_runs(cluster, tmp_path):
     kwargs = dict(episodes=2, image_size=(32, 32), cameras=("scene",), progress=False, episode_length=30)
     local = run_evaluation("expert", ["default"], **kwargs)
     spread = run_evaluation("expert", ["default"], **kwargs, executor=ExecutorConfig("ray", 2), shard_size=1,
                             film=True)
     assert local.reports == spread.reports
     assert sorted(spread.films) == [("default", 10000), ("default", 10001)]
-    assert all(video[4:8] == b"ftyp" for video in spread.films.values())  # mp4 files
+    for (_, seed), video in spread.films.items():  # mp4 files of the reset and every step, made in the Ray workers
+        (tmp_path / f"{seed}.mp4").write_bytes(video)
+        assert video[4:8] == b"ftyp" and len(read_video(tmp_path / f"{seed}.mp4")) == 31
 
 
 def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_command(tmp_path):

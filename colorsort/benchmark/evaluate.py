@@ -85,13 +85,13 @@ class _Runner:
         self.policy.reset(self.env, seed)
         film = EpisodeFilm(self.env) if self.film else None
         try:
-            if film is not None:
-                film.add(getattr(self.policy, "phase", None))
             terminated = truncated = False
-            while not (terminated or truncated):
-                obs, _, terminated, truncated, info = self.env.step(self.policy.act(obs))
-                if film is not None:
+            while True:
+                if film is not None:  # the reset, then every step
                     film.add(getattr(self.policy, "phase", None))
+                if terminated or truncated:
+                    break
+                obs, _, terminated, truncated, info = self.env.step(self.policy.act(obs))
         except BaseException:
             if film is not None:
                 film.discard()

@@ -12,7 +12,7 @@ import tempfile
 from pathlib import Path
 
 from colorsort.benchmark.gym_env import ColorSortGymEnv
-from colorsort.cell.referee import BoxEvent, Outcome
+from colorsort.cell.referee import describe_box
 from colorsort.config import BIN_COLORS
 from colorsort.data.video import VideoWriter, draw_lines
 
@@ -21,15 +21,6 @@ FILM_SIZE = (360, 480)  # (height, width) [px]
 EVENTS_SHOWN = 3  # the latest box events written on the frame
 
 GOOD, BAD = (120, 255, 120), (255, 110, 110)  # RGB of an event handled right / wrong
-
-
-def describe(event: BoxEvent) -> str:
-    """One box's outcome in words, e.g. ``red box -> red bin`` or ``purple box let through``."""
-    if event.outcome is Outcome.REJECTED:
-        return f"{event.color} box let through"
-    if event.bin is not None:
-        return f"{event.color} box -> {event.bin} bin"
-    return f"{event.color} box {event.outcome.value}"
 
 
 def overlay_lines(env: ColorSortGymEnv, phase: str | None) -> list[str | tuple[str, tuple[int, int, int]]]:
@@ -45,7 +36,7 @@ def overlay_lines(env: ColorSortGymEnv, phase: str | None) -> list[str | tuple[s
     lines.append(f"next box: {nearest}  ray: {'blocked' if cell.box_detected else 'clear'}")
     events = cell.events[: env.variant.boxes]
     for event in events[-EVENTS_SHOWN:]:
-        text = f"{event.time:5.1f} s  {describe(event)}"
+        text = f"{event.time:5.1f} s  {describe_box(event.color, event.outcome, event.bin)}"
         lines.append((text, GOOD if event.outcome.handled_right else BAD))
     return lines
 

@@ -17,12 +17,13 @@ from pathlib import Path
 from typing import Any
 
 from colorsort.benchmark.metrics import EvalReport
+from colorsort.cell.referee import describe_box
 from colorsort.variants import get_variant
 
 SUCCESSES_FILMED = 3  # successes kept per variant besides every failure, unless --videos says otherwise
 OUTCOME_COLORS = {"placed": "#3a9d4f", "rejected": "#8fb8de", "misplaced": "#e0902f", "dropped": "#c8372d"}
 OUTCOME_WORDS = {"placed": "placed in its bin", "rejected": "let through", "misplaced": "misplaced",
-                 "dropped": "dropped"}
+                 "dropped": "dropped"}  # the plot's legend
 
 STYLE = """
 body { font: 15px/1.45 system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; padding: 0 1em; }
@@ -77,7 +78,7 @@ def plot_outcomes(reports: list[EvalReport], path: Path) -> None:
     names = [r.variant for r in reports][::-1]
     left = [0.0] * len(reports)
     for outcome, color in OUTCOME_COLORS.items():
-        counts = [sum(b["outcome"] == outcome for e in r.per_episode for b in e.get("boxes", []))
+        counts = [sum(b["outcome"] == outcome for e in r.per_episode for b in e["boxes"])
                   for r in reports][::-1]
         ax.barh(names, counts, left=left, color=color, label=OUTCOME_WORDS[outcome])
         left = [a + b for a, b in zip(left, counts, strict=True)]
@@ -90,12 +91,6 @@ def plot_outcomes(reports: list[EvalReport], path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, format="svg")
     plt.close(fig)
-
-
-def box_words(box: dict[str, Any]) -> str:
-    """One box's outcome in words, e.g. ``blue box misplaced in the red bin``."""
-    where = f" in the {box['bin']} bin" if box["bin"] else ""
-    return f"{box['color']} box {OUTCOME_WORDS[box['outcome']]}" + (where if box["outcome"] == "misplaced" else "")
 
 
 def _summary(reports: list[EvalReport]) -> str:
@@ -112,14 +107,14 @@ def _summary(reports: list[EvalReport]) -> str:
 
 
 def _episode(variant: str, boxes: int, e: dict[str, Any], filmed: bool) -> str:
-    items = "".join(f"<li class='{b['outcome']}'>{b['time']:.1f} s: {html.escape(box_words(b))}</li>"
-                    for b in e.get("boxes", []))
+    items = "".join(f"<li class='{b['outcome']}'>{b['time']:.1f} s: "
+                    f"{html.escape(describe_box(b['color'], b['outcome'], b['bin']))}</li>" for b in e["boxes"])
     video = (f"<video controls muted preload='metadata' width='480' height='360' src='{film_name(variant, e['seed'])}'>"
              "</video>" if filmed else "<p class='meta'>not filmed</p>")
     state = "ok" if e["success"] else "failed"
-    ended = e.get("ended", state)
+    ended = e["ended"]
     if ended == "time limit":
-        ended += f" ({len(e.get('boxes', []))} of {boxes} boxes left play)"
+        ended += f" ({len(e['boxes'])} of {boxes} boxes left play)"
     return (f"<div class='episode {state}' id='{variant}-seed{e['seed']}'><h3>seed {e['seed']}: "
             f"{html.escape(ended)}</h3><p class='meta'>{e['steps']} steps, {e['sim_time']:.1f} s "
             f"of sim time</p><ol class='boxes'>{items or '<li>no box left play</li>'}</ol>{video}</div>")

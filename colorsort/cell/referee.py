@@ -59,6 +59,16 @@ class BoxEvent:
     bin: str | None  # the bin it rests in; None when it left the belt or fell
 
 
+def describe_box(color: str, outcome: str, bin: str | None) -> str:
+    """A box's outcome in words (``BoxEvent`` fields, or their JSON): ``red box -> red bin``,
+    ``blue box -> red bin (misplaced)``, ``green box dropped``, ``purple box let through``."""
+    if outcome == Outcome.REJECTED:
+        return f"{color} box let through"
+    if bin is not None:
+        return f"{color} box -> {bin} bin" + (" (misplaced)" if outcome == Outcome.MISPLACED else "")
+    return f"{color} box {Outcome(outcome).value}"
+
+
 @dataclass
 class Tally:
     """Episode counters reported in ``info``; ``placed`` counts boxes in the bin of their colour, per bin."""

@@ -70,7 +70,6 @@ def load_episode(root: str | Path, index: int, repo_id: str | None = None) -> Re
 def not_replayable(root: Path) -> str:
     """Why the folder ``root`` (with no ColorSort marker) cannot be replayed, and what opens it instead."""
     info = root / "meta" / "info.json"
-    recordings = sorted(p.name for p in root.glob("*/meta/info.json") for p in [p.parent.parent])
     if info.is_file() and "next.success" in json.loads(info.read_text()).get("features", {}):
         return (f"{root} is a LeRobot evaluation recording (lerobot-eval --eval.recording=true): it holds the "
                 "policy's observations, actions, rewards and success, but not the simulator states that "
@@ -80,8 +79,9 @@ def not_replayable(root: Path) -> str:
     if info.is_file():
         return (f"{root} is a LeRobot dataset but not one colorsort-collect recorded (no {MARKER}): it has no "
                 "simulator states to replay; lerobot-dataset-viz shows its frames")
-    if recordings:
-        return f"{root} holds no dataset itself; the datasets under it: {recordings}"
+    inside = sorted(found.parent.parent.name for found in root.glob("*/meta/info.json"))
+    if inside:
+        return f"{root} holds no dataset itself; the datasets under it: {inside}"
     return f"{root} is not a ColorSort dataset (no {MARKER})"
 
 
