@@ -247,6 +247,25 @@ def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
         fill("<!-- scores baselines/nothing table -->\n<!-- end scores -->", REPO)
 
 
+
+def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_path):
+    """One seed: the rate with its Wilson interval; three seeds: their mean and range, never one cell per seed."""
+    from colorsort.training.tables import headline
+
+    def row(variant: str, seed: int, rate: float) -> dict:
+        return {"demos_tried": 40, "demos": 40, "variant": variant, "seed": seed, "steps": 5000, "train_minutes": 20.0,
+                "success_rate": rate, "success_ci95": [rate - 0.1, rate + 0.05], "episodes": 50}
+
+    for name, rows in (("one", [row("default", 1000, 0.9)]),
+                       ("three", [row(v, s, r) for s, r in ((1000, 0.9), (1001, 0.6), (1002, 0.75))
+                                  for v in ("default", "fast")])):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "scores.json").write_text(json.dumps({"rows": rows, "recipe": {"cameras": []}}))
+    one, three = headline(tmp_path).splitlines()[2:]
+    assert "`default` 90% (80-95%, 50)" in one and "20 min on the CPU |" in one
+    assert "`default` mean 75%, seeds 60-90% (3 x 50); `fast` mean 75%" in three
+    assert "per seed, 3 seeds" in three and three.count("`default`") == 1
+
 @pytest.mark.parametrize("variant", ["robots-panda", "tracking"])
 def test_a_checkpoint_on_a_variant_it_does_not_fit_gets_a_one_line_error(variant, capsys):
     """act-state takes 23 state inputs: the Panda's state has 25, a tracking belt's 24."""
