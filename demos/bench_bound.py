@@ -8,7 +8,9 @@ unlimited; then at rest on the box and over the bin, with the expert's accelerat
 reference (every leg rest to rest, with the expert's acceleration and jerk); then the
 expert's measured cycle per phase (``colorsort-sort``'s phase times on the same preset, sim seconds per
 box placed) and the ratio of its active cycle (intercept, track, carry, release) to each, averaged over
-the bins (a box's colour, so its bin, is drawn uniformly).
+the bins (a box's colour, so its bin, is drawn uniformly). Last, the same with a box every
+``--saturate`` seconds (0.8 by default, 2.5 times the preset's rate): a box is always waiting, so the
+cycle measured there is the expert's own and not the spawner's.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import argparse
 
 from colorsort.benchmark.sorting import SortConfig, run_sort
 from colorsort.cell.env import ColorSort
+from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS
 from colorsort.expert.bound import LEGS, MODES, shortest_cycle
 from colorsort.expert.factory import make_expert
@@ -31,6 +34,8 @@ def main() -> None:
     p.add_argument("--preset", default="tracking-fast", choices=["tracking", "tracking-fast"])
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--boxes", type=int, default=20)
+    p.add_argument("--saturate", type=float, default=0.8, help="spawn period [s] of the saturated run")
+    p.add_argument("--saturate-seconds", type=float, default=60.0, help="sim time of the saturated run [s]")
     args = p.parse_args()
 
     env = ColorSort(robots="IRB140", preset=args.preset, has_offscreen_renderer=True, use_camera_obs=False,
@@ -70,6 +75,32 @@ def main() -> None:
     active = sum(phases.get(p, 0.0) for p in ACTIVE) / placed
     print(f"\nexpert's active cycle {active:.3f} s; against the bins' mean cycle: "
           + "; ".join(f"{mode} {mean[mode]:.3f} s (ratio {active / mean[mode]:.2f})" for mode in MODES))
+
+    phases, placed = saturated(args.preset, args.saturate, args.saturate_seconds)
+    active = sum(phases.get(p, 0.0) for p in ACTIVE) / placed
+    print(f"\nsaturated: a box every {args.saturate:g} s for {args.saturate_seconds:g} s of sim time (seed 0), "
+          f"{placed} placed (the rest ride off the belt); seconds per box placed: "
+          + ", ".join(f"{p} {phases.get(p, 0.0) / placed:.3f}" for p in ACTIVE)
+          + f"; active cycle {active:.3f} s: "
+          + "; ".join(f"{mode} ratio {active / mean[mode]:.2f}" for mode in MODES))
+
+
+def saturated(preset: str, period: float, seconds: float) -> tuple[dict[str, float], int]:
+    """The expert's sim seconds per phase and boxes placed with a box spawned every ``period`` [s]."""
+    env = ColorSort(robots="IRB140", preset=preset, spawn_period=period, has_offscreen_renderer=True,
+                    use_camera_obs=False, ignore_done=True, seed=0, time_limit=seconds + 10.0)
+    obs = env.reset()
+    expert = make_expert(env)
+    expert.reset(obs)
+    phases: dict[str, float] = {}
+    while env.cur_time < seconds:
+        action = expert.act(obs)
+        phase = expert.phase.value
+        phases[phase] = phases.get(phase, 0.0) + env.control_timestep
+        obs, *_ = env.step(action)
+    placed = sum(e.outcome is Outcome.PLACED for e in env.events)
+    env.close()
+    return phases, placed
 
 
 if __name__ == "__main__":
