@@ -8,7 +8,8 @@ ray with the belt stopped (the decision, whose chunk of labels is belt-pass on),
 while the belt runs it past the ray. Prints, per kind of frame, how many there are, the mean
 label and the mean predicted belt-pass of the first action of each chunk (+1 on, -1 off), and how
 many predictions are on. A policy that predicts off at the decision holds the box at the sensor
-until the time limit (``distractors`` 0%).
+until the time limit (``distractors`` 0%). It prints only (no docs/results file): the checkpoints it
+probes come from ``colorsort-baseline`` runs, not from ``make bench``.
 """
 
 from __future__ import annotations
@@ -22,7 +23,6 @@ import numpy as np
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
 from colorsort.data.schema import ACTION, ENV_STATE, STATE  # noqa: E402
-from colorsort.results import recorded  # noqa: E402
 
 
 def main() -> None:
@@ -62,5 +62,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    with recorded(__file__):
-        main()
+    main()

@@ -5,7 +5,8 @@ expert's demos come from (and in what proportion), which inputs the policy reads
 or the simulator's box state), the ACT size and training length, and which variants score it.
 
 - ``state``: the simulator's box state (``observation.environment_state``) and the arm's; no
-  cameras. The policy in ``baselines/act-state``.
+  cameras; demos with late belt passes (``late_pass``), three training seeds. The policy in
+  ``baselines/act-state``.
 - ``state-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
 - ``camera``: the ``sensor`` and ``wrist`` cameras at 64 px and ``observation.state`` only
   (joints, cup, suction, ray, belt): what a real cell has. ResNet-18 from scratch, on 2 CPU cores.
@@ -232,7 +233,10 @@ class Recipe:
 
 
 RECIPES: dict[str, Recipe] = {r.name: r for r in (
-    Recipe("state"),
+    # a yellow or purple box is let through only when the data holds the state of a box waiting at the
+    # ray often enough (demos/probe_pass.py): twice the distractor demos, each pass held back 0..100 steps
+    Recipe("state", train_mix=(("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)), demos=(40,),
+           late_pass=100, steps=2500, seeds=(1000, 1001, 1002)),
     Recipe("state-tracking", act=TRACKING_ACT, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,),
            boxes_per_episode=5, steps=3000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
     # every variant in the mix, yet few enough demos for ~8 passes over them in the hour: 115 demos
