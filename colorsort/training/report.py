@@ -127,6 +127,7 @@ def plot_demos(rows: list[dict], label: str, variant: str, path: Path) -> None:
                     xytext=(6, -12), fontsize=7)
     ax.set_xscale("log")
     ax.set_xticks(n, [str(x) for x in n])
+    ax.minorticks_off()  # the log axis's own labels (3x10^1) would print over the demo counts
     ax.set_xlabel("expert demos")
     ax.set_ylabel(f"success on {variant} [%]")
     ax.set_title(f"{label} on ColorSort, {rows[0]['episodes']} evaluation seeds", fontsize=9)
