@@ -248,7 +248,6 @@ def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
         fill("<!-- scores baselines/nothing table -->\n<!-- end scores -->", REPO)
 
 
-
 def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_path):
     """One seed: the rate with its Wilson interval; three seeds: their mean and range, never one cell per seed."""
     from colorsort.training.tables import headline
@@ -266,6 +265,7 @@ def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_p
     assert "`default` 90% (80-95%, 50)" in one and "20 min on the CPU |" in one
     assert "`default` mean 75%, seeds 60-90% (3 x 50); `fast` mean 75%" in three
     assert "per seed, 3 seeds" in three and three.count("`default`") == 1
+
 
 @pytest.mark.parametrize("variant", ["robots-panda", "tracking"])
 def test_a_checkpoint_on_a_variant_it_does_not_fit_gets_a_one_line_error(variant, capsys):
