@@ -121,7 +121,8 @@ def test_a_local_worker_killed_outright_loses_only_its_shard_and_resume_complete
 
     out = tmp_path / "ds"
     killed = []
-    watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 3.0, killed)
+    # 1 s: a shard of 2 state-only episodes was once recorded within 3 s of its worker starting
+    watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 1.0, killed)
     summary = collect(CollectConfig(out=str(out), workers=2, retries=0, **SCALE), **QUIET)
     watcher.join()
     assert killed and len(summary.errors) == 1 and "SIGKILL" in summary.errors[0]
