@@ -108,6 +108,17 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
 
 
+def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
+    """``boxes_by_variant``: the seed variant's demos hold one box each, in a part named for it, merged."""
+    from colorsort.training.stages import collect, size
+
+    recipe = get_recipe("state", train_mix=(("seed", 1),), demos=(1,), boxes_by_variant=(("seed", 1),), late_pass=0)
+    root = collect(recipe, 1, tmp_path, workers=1)
+    part = tmp_path / "data" / "seed-1-b1"
+    assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["boxes_per_episode"] == 1
+    assert size(root) == size(part) and size(root)[0] == 1
+
+
 def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
     from colorsort.cli.baseline import main
 
@@ -128,8 +139,14 @@ def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_st
     assert get_recipe("state").split(40) == {"default": 8, "jitter": 8, "fast": 8, "distractors": 16}
     camera = get_recipe("camera")
     assert camera.split(48) == {"default": 8, "lighting": 8, "jitter": 8, "fast": 8, "distractors": 16}
+    one_box_seed = get_recipe("camera", train_mix=camera.train_mix + (("seed", 1),), boxes_by_variant=(("seed", 1),))
+    assert (one_box_seed.boxes("seed"), one_box_seed.boxes("jitter")) == (1, camera.boxes_per_episode)
     assert sum(camera.split(7).values()) == 7
     assert (camera.updates(48, 1000), camera.updates(10, 1000)) == (camera.steps, camera.small_steps)
+    with pytest.raises(ValueError, match="at least 1 box"):
+        get_recipe("camera", boxes_by_variant=(("seed", 0),))
+    with pytest.raises(ValueError, match="Valid variants"):
+        get_recipe("camera", boxes_by_variant=(("nope", 1),))
     trained_alike = get_recipe("state", demos=(8, 40), passes=10.0, batch_size=64)
     assert (trained_alike.updates(8, 2560), trained_alike.updates(40, 12800)) == (400, 2000)
     with pytest.raises(ValueError, match="seeds"):

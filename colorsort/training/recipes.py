@@ -109,6 +109,8 @@ class Recipe:
         train_mix: (variant, weight) pairs: each demo count is split over them in proportion.
         demos: increasing demo counts; the largest trains the shipped policy.
         boxes_per_episode: boxes that leave the belt in one demo.
+        boxes_by_variant: (variant, boxes) pairs for training variants whose demos hold another
+            number of boxes (``seed`` brings a box every 30 s: one box a demo keeps its idle frames few).
         late_pass: the collector's ``--late-pass`` [control steps]: demos that show the states a
             chunking policy reaches when it lets a box through late (``colorsort.data.late_pass``).
         steps: training updates of the largest set.
@@ -135,6 +137,7 @@ class Recipe:
     train_mix: tuple[tuple[str, float], ...] = (("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 1))
     demos: tuple[int, ...] = (8, 40, 200)
     boxes_per_episode: int = 3
+    boxes_by_variant: tuple[tuple[str, int], ...] = ()
     late_pass: int = 0
     steps: int = 6000
     small_steps: int = 2500
@@ -158,6 +161,10 @@ class Recipe:
             get_variant(name)  # ValueError naming the valid variants
         self._check_fit()
         check_cameras(self.cameras)
+        for variant, boxes in self.boxes_by_variant:  # a variant left out of train_mix is not collected
+            get_variant(variant)
+            if boxes < 1:
+                raise ValueError(f"boxes_by_variant has ({variant!r}, {boxes}): give at least 1 box")
         if any(w <= 0 for _, w in self.train_mix):
             raise ValueError(f"train_mix={self.train_mix}: give every variant a weight above 0")
         if (not self.demos or list(self.demos) != sorted(set(self.demos))
@@ -222,6 +229,10 @@ class Recipe:
         if self.passes is not None:
             return max(1, round(self.passes * frames / self.batch_size))
         return self.steps if n == self.demos[-1] else self.small_steps
+
+    def boxes(self, variant: str) -> int:
+        """Boxes in each demo of training variant ``variant``."""
+        return dict(self.boxes_by_variant).get(variant, self.boxes_per_episode)
 
     @property
     def data_suffix(self) -> str:

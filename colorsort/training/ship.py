@@ -54,6 +54,8 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
               "`observation.environment_state`: the policy sees the boxes" if recipe.cameras else
               "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
     act = recipe.act
+    boxes = f"{recipe.boxes_per_episode} boxes each" + "".join(
+        f", {variant}'s {n}" for variant, n in recipe.boxes_by_variant)
     backbone = " ResNet-18 trained from scratch (no pretrained weights)," if recipe.cameras else ""
     curve = ""
     if results.get("curve"):
@@ -77,7 +79,7 @@ and {act.n_decoder_layers} decoder layers, chunks of {act.chunk_size} actions {e
 learning rate {act.optimizer_lr}) on {inputs}. {size_mb:.1f} MB.
 
 Made by `{command}` (recipe `{recipe.name}`) on commit {commit()}, started {results['started']}, on
-{machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {recipe.boxes_per_episode} boxes each),
+{machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {boxes}),
 {largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {recipe.batch_size} in
 {largest[0]['train_minutes']:.0f} min of `lerobot-train`. Stages reused from earlier runs of the same command
 count with the time they took then.

@@ -2,7 +2,8 @@
 
 Layout of the working folder ``out``::
 
-    data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-late<L>: --late-pass L)
+    data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-b<B>: B boxes a demo
+                              where the recipe's boxes_by_variant says so; -late<L>: --late-pass L)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
     train/demos-<N>-<S>steps[-cos]-seed<K>/  lerobot-train's run of S updates with seed K (-cos: cosine
                               learning rate); <run>.json its timing
@@ -55,11 +56,13 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
         return root
     parts = []
     for k, (variant, count) in enumerate(recipe.split(n).items()):
-        part = out / "data" / f"{variant}-{count}{recipe.data_suffix}"
+        boxes = recipe.boxes(variant)
+        part = out / "data" / f"{variant}-{count}{'' if boxes == recipe.boxes_per_episode else f'-b{boxes}'}" \
+                              f"{recipe.data_suffix}"
         if not (part / "meta" / "colorsort.json").is_file():
             shutil.rmtree(part, ignore_errors=True)
             run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
-                 "--boxes-per-episode", str(recipe.boxes_per_episode), "--seed", str(SEED_STRIDE * k),
+                 "--boxes-per-episode", str(boxes), "--seed", str(SEED_STRIDE * k),
                  "--cameras", ",".join(recipe.cameras) or "none", "--image-size", str(recipe.image_size),
                  "--late-pass", str(recipe.late_pass), "--workers", str(workers), "--out", str(part),
                  "--repo-id", REPO_ID],
