@@ -255,7 +255,7 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
     # run 2.3-2.9 updates/s, so 8,000 updates (17 passes) fit the hour: 64 px at 3,600 (7.8) scored 68% on default
     Recipe("camera", cameras=("sensor", "wrist"), image_size=32, batch_size=32,
            train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),
-           demos=(48,), late_pass=100, steps=8000, save_every=2000),
+           demos=(48,), late_pass=100, steps=8000, save_every=2000, seeds=(1000, 1001, 1002)),
     # 3600 updates: the same run trained on to 4500 (identical up to 3600) fell from 66% to 0% on tracking
     Recipe("camera-tracking", act=TRACKING_ACT, cameras=("sensor", "wrist"), image_size=64, batch_size=32,
            train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(48,), boxes_per_episode=5, steps=3600,
