@@ -156,6 +156,33 @@ def test_resume_after_the_whole_run_was_killed_keeps_its_finished_shards(referen
     same_data(reference, out)
 
 
+def test_a_worker_file_killed_mid_write_does_not_stop_resume(reference, tmp_path):
+    out = tmp_path / "ds"
+    command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
+               "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "1", "--workers", "2"]
+    staging = tmp_path / ".ds.staging"  # as a run killed between opening and writing a worker file leaves it
+    staging.mkdir()
+    settings = CollectConfig(out=str(out), episodes=4, boxes_per_episode=2, cameras=(), shard_size=1,
+                             workers=2).settings()
+    (staging / "run.json").write_text(json.dumps({"run": "killed-run", "settings": settings}))
+    (staging / "shard-000002.worker.json").write_text("")
+    done = subprocess.run(command + ["--resume"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    same_data(reference, out)
+
+
+def test_writes_that_must_appear_whole_leave_no_partial_file(tmp_path):
+    from colorsort.data.shards import previous_attempt
+    from colorsort.data.store import write_whole
+
+    worker = tmp_path / "shard-000000.worker.json"
+    assert previous_attempt(worker) == 0
+    write_whole(worker, {"attempt": 3})
+    assert previous_attempt(worker) == 3 and [p.name for p in tmp_path.iterdir()] == [worker.name]
+    worker.write_text("")  # what an in-place write killed after opening the file left
+    assert previous_attempt(worker) == 1
+
+
 def test_a_shard_from_another_run_or_with_other_settings_is_refused(tmp_path):
     small = dict(episodes=2, cameras=(), shard_size=1)
     settings = CollectConfig(**small).settings()

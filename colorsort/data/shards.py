@@ -22,7 +22,7 @@ from pathlib import Path
 
 from colorsort.data.config import CollectConfig
 from colorsort.data.recorder import ShardReport, record_shard
-from colorsort.data.store import SHARD_MARKER, read_shard
+from colorsort.data.store import SHARD_MARKER, read_shard, write_whole
 from colorsort.executors.base import TaskContext
 
 # What worker processes import once, before they fork (seconds of torch):
@@ -58,19 +58,28 @@ def record(job: ShardJob, ctx: TaskContext) -> ShardReport:
     if root.exists():
         shutil.rmtree(root)  # what an attempt killed while recording left
     worker = root.with_name(root.name + ".worker.json")
-    attempt = json.loads(worker.read_text())["attempt"] + 1 if worker.is_file() else 1
-    worker.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid(), "attempt": attempt,
-                                  "started": time.time()}))
+    attempt = previous_attempt(worker) + 1
+    write_whole(worker, {"host": socket.gethostname(), "pid": os.getpid(), "attempt": attempt,
+                         "started": time.time()})
     report = record_shard(job.config, list(job.indices), root, ctx.send, ctx.stopping)
     if report.incomplete:  # no marker: the shard counts as unfinished and --resume records it again
         shutil.rmtree(root, ignore_errors=True)
         return report
     record_ = {"run": job.run, "settings": job.config.settings(), "indices": list(job.indices),
                **{k: v for k, v in asdict(report).items() if k != "root"}}
-    tmp = root / (SHARD_MARKER + ".tmp")
-    tmp.write_text(json.dumps(record_))
-    tmp.rename(root / SHARD_MARKER)  # the marker appears whole, or not at all
+    write_whole(root / SHARD_MARKER, record_)
     return report
+
+
+def previous_attempt(worker: Path) -> int:
+    """The attempt number a shard's worker file records: 0 when there is none; 1 when it cannot be
+    read (written by a version that wrote it in place, killed mid-write): at least one attempt was made."""
+    if not worker.is_file():
+        return 0
+    try:
+        return int(json.loads(worker.read_text())["attempt"])
+    except (ValueError, KeyError, TypeError):
+        return 1
 
 
 def merge(sources: list[Path], dest: Path, repo_id: str) -> None:

@@ -12,6 +12,7 @@ that folder for one run: it opens it, lists and checks its shards, and publishes
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import uuid
 from collections.abc import Callable
@@ -23,6 +24,14 @@ from colorsort.data.config import CollectConfig
 MARKER = "meta/colorsort.json"  # the collector's record: settings and the episodes tried
 RUN_FILE = "run.json"  # in the staging folder: the run its shards belong to
 SHARD_MARKER = "meta/colorsort-shard.json"  # in a shard: written once it is finished
+
+
+def write_whole(path: Path, content: dict) -> None:
+    """``content`` as JSON at ``path``, which appears whole or not at all (a process killed while
+    writing leaves the old file, or none)."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(content))
+    os.replace(tmp, path)
 
 
 def read_marker(root: Path) -> dict | None:
@@ -90,7 +99,7 @@ def open_staging(config: CollectConfig, root: Path, log) -> tuple[Path, str]:
         shutil.rmtree(staging)
     staging.mkdir(parents=True)
     run = uuid.uuid4().hex[:12]
-    run_file.write_text(json.dumps({"run": run, "settings": config.settings()}))
+    write_whole(run_file, {"run": run, "settings": config.settings()})
     return staging, run
 
 
@@ -197,7 +206,7 @@ class StagingRun:
         """Nothing new was kept: record in the existing dataset's marker what was tried."""
         assert self.marker is not None
         self.marker.update(tried=sorted(tried), failed=failed)
-        (self.root / MARKER).write_text(json.dumps(self.marker))
+        write_whole(self.root / MARKER, self.marker)
 
     def discard(self) -> None:
         shutil.rmtree(self.folder, ignore_errors=True)
