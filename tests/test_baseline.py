@@ -108,6 +108,32 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
 
 
+def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
+    """``image_shift``: LeRobot's own image transforms, one random shift per image, and a run folder of its own."""
+    import draccus
+    import torch
+    from lerobot.configs.default import DatasetConfig
+    from lerobot.transforms.transforms import ImageTransforms
+
+    from colorsort.training.stages import train_command
+
+    shifted = get_recipe("camera", image_shift=0.1)
+    args = shifted.augment_args()
+    assert get_recipe("camera").augment_args() == [] and shifted.run_suffix == "-shift0.1"
+    assert set(args) <= set(train_command(shifted, tmp_path, 10, 1000, tmp_path / "run"))
+    config = draccus.parse(DatasetConfig, args=["--repo_id=local/x", *[a.replace("--dataset.", "--") for a in args]])
+    transforms = ImageTransforms(config.image_transforms)
+    image = torch.zeros(3, 32, 32)
+    image[:, 12:20, 12:20] = 1.0
+    moved = [transforms(image) for _ in range(20)]
+    assert all(m.shape == image.shape and m.sum() == image.sum() for m in moved)  # moved whole, no border reached
+    offsets = {tuple(torch.nonzero(m[0])[0].tolist()) for m in moved}
+    assert len(offsets) > 1 and all(abs(r - 12) <= 3 and abs(c - 12) <= 3 for r, c in offsets)  # 0.1 of 32 px
+    for bad in (dict(image_shift=0.5), dict(image_shift=-0.1), dict(image_shift=0.1, cameras=())):
+        with pytest.raises(ValueError, match="image_shift"):
+            get_recipe("camera", **bad)
+
+
 def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
     """``boxes_by_variant``: the seed variant's demos hold one box each, in a part named for it, merged."""
     from colorsort.training.stages import collect, size

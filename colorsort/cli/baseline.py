@@ -59,6 +59,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--episode-length", type=int, help="evaluation steps before truncation")
     p.add_argument("--cameras", help="'none' (a state policy) or comma-separated cameras")
     p.add_argument("--image-size", type=int, help="camera images [px], square")
+    p.add_argument("--image-shift", type=float, help="random shifts of training images, up to this fraction "
+                                                     "of their size (0: off)")
     p.add_argument("--device", help="lerobot-train's device: cpu, cuda or mps")
     p.add_argument("--workers", type=int, default=2, help="collection processes")
     p.add_argument("--envs", type=int, default=2, help="evaluation processes")
@@ -86,7 +88,8 @@ def overrides(args: argparse.Namespace) -> dict:
     if args.lr_schedule:
         found["act"] = replace(get_recipe(args.recipe).act, lr_schedule=args.lr_schedule)
     for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",
-                "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size", "device"):
+                "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size", "image_shift",
+                "device"):
         if getattr(args, key) is not None:
             found[key] = getattr(args, key)
     return found

@@ -57,6 +57,8 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     boxes = f"{recipe.boxes_per_episode} boxes each" + "".join(
         f", {variant}'s {n}" for variant, n in recipe.boxes_by_variant)
     backbone = " ResNet-18 trained from scratch (no pretrained weights)," if recipe.cameras else ""
+    if recipe.image_shift:
+        backbone += f" every training image shifted at random by up to {recipe.image_shift:g} of its size,"
     curve = ""
     if results.get("curve"):
         curve = (f"\nLearning curve on `{recipe.main_variant}` (each checkpoint on the first {recipe.curve_episodes} "

@@ -5,8 +5,8 @@ Layout of the working folder ``out``::
     data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-b<B>: B boxes a demo
                               where the recipe's boxes_by_variant says so; -late<L>: --late-pass L)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
-    train/demos-<N>-<S>steps[-cos]-seed<K>/  lerobot-train's run of S updates with seed K (-cos: cosine
-                              learning rate); <run>.json its timing
+    train/demos-<N>-<S>steps[-cos][-shift<F>]-seed<K>/  lerobot-train's run of S updates with seed K
+                              (-cos: cosine learning rate; -shift<F>: images shifted up to F); <run>.json its timing
     eval/<run>-<exec>-<variant>.json  colorsort-eval's report of the run's last checkpoint, executing its
                               chunks as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
     curve/<run>-<exec>-<step>.json    colorsort-eval's report of an earlier checkpoint (the learning curve)
@@ -102,14 +102,14 @@ def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Pa
     save_every = recipe.save_every if 0 < recipe.save_every < steps else steps
     return [str(BIN / "lerobot-train"), f"--dataset.repo_id={REPO_ID}", f"--dataset.root={data}",
             "--policy.type=act", f"--policy.device={recipe.device}", "--policy.push_to_hub=false",
-            *recipe.act.args(), f"--batch_size={recipe.batch_size}", f"--steps={steps}",
+            *recipe.act.args(), *recipe.augment_args(), f"--batch_size={recipe.batch_size}", f"--steps={steps}",
             f"--save_freq={save_every}", "--log_freq=200", "--num_workers=1", f"--seed={seed}",
             "--wandb.enable=false", f"--output_dir={run_dir}"]
 
 
 def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
     """``lerobot-train``; the run folder and its timing ``{"started": unix time, "wall_s": s}`` (reused if there)."""
-    run_dir = out / "train" / f"{data.name}-{steps}steps{recipe.act.run_suffix}-seed{seed}"
+    run_dir = out / "train" / f"{data.name}-{steps}steps{recipe.run_suffix}-seed{seed}"
     timing_path = run_dir.with_suffix(".json")
     if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
         print(f"reusing {run_dir}")
