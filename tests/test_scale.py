@@ -183,6 +183,48 @@ def test_writes_that_must_appear_whole_leave_no_partial_file(tmp_path):
     assert previous_attempt(worker) == 1
 
 
+def test_an_interrupt_during_held_interrupts_comes_after_the_block():
+    from colorsort.executors.base import held_interrupts
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a Ray worker, or a terminal
+    finished = []
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with held_interrupts():
+                signal.raise_signal(signal.SIGINT)
+                time.sleep(0.01)
+                finished.append(True)
+        assert finished == [True] and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_an_interrupt_while_an_episode_saves_keeps_that_episode(reference, monkeypatch, tmp_path):
+    """Ray cancels a task with a SIGINT, which can land while LeRobot saves an episode (CI caught a run that
+    lost both its shards this way): the save ends first, then the shard stops, every saved episode kept."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from colorsort.data.recorder import record_shard
+
+    save = LeRobotDataset.save_episode
+
+    def interrupted_save(self, *args, **kwargs):
+        signal.raise_signal(signal.SIGINT)  # Ray's cancel, as it reaches a task
+        return save(self, *args, **kwargs)
+
+    monkeypatch.setattr(LeRobotDataset, "save_episode", interrupted_save)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        config = CollectConfig(out=str(tmp_path / "ds"), **SCALE)
+        report = record_shard(config, [0, 1], tmp_path / "shard", lambda r: None)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert report.interrupted and not report.incomplete and report.kept == [0] and report.tried == [0]
+    shard = LeRobotDataset(config.repo_id, root=tmp_path / "shard")
+    assert shard.meta.total_episodes == 1
+    assert shard.meta.total_frames == len(by_episode_number(reference)[0]["action"])
+
+
 def test_a_shard_from_another_run_or_with_other_settings_is_refused(tmp_path):
     small = dict(episodes=2, cameras=(), shard_size=1)
     settings = CollectConfig(**small).settings()

@@ -21,6 +21,7 @@ from colorsort.config import sorting_time_limit
 from colorsort.data.config import CollectConfig
 from colorsort.data.late_pass import LatePass
 from colorsort.data.schema import features, frame, task_text
+from colorsort.executors.base import held_interrupts
 from colorsort.expert.factory import make_expert
 from colorsort.variants import get_variant
 
@@ -129,13 +130,14 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                 frames += 1
             reason = judge(env.events, k).reason
             t = time.perf_counter()
-            if reason == "ok":
-                dataset.save_episode()
-                out.kept.append(index)
-            else:
-                dataset.clear_episode_buffer()
-                out.failed[str(index)] = reason
-            out.tried.append(index)
+            with held_interrupts():  # a save cut short would cost every episode of the shard
+                if reason == "ok":
+                    dataset.save_episode()
+                    out.kept.append(index)
+                else:
+                    dataset.clear_episode_buffer()
+                    out.failed[str(index)] = reason
+                out.tried.append(index)
             sec["episode saving"] += time.perf_counter() - t
             report(EpisodeResult(index, seed, reason == "ok", reason, frames, frames / config.fps))
     except (KeyboardInterrupt, _Stopped):

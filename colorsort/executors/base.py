@@ -4,13 +4,18 @@ A task is a top-level function ``fn(arg, ctx)`` and its argument, both picklable
 reports progress to the caller (``on_message``), ``ctx.stopping()`` turns true when the caller was
 asked to stop (Ctrl-C). An executor runs the tasks, at most ``workers`` at once; a task whose
 process died (SIGKILL, out of memory, a node lost) runs again, up to ``retries`` times; an
-exception raised by the task is its result, not retried (it would raise again).
+exception raised by the task is its result, not retried (it would raise again). A stop can also come
+as KeyboardInterrupt (Ray's cancel, a terminal's Ctrl-C); a task holds it back where a write must
+not be cut short with ``held_interrupts()``.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+import signal
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -90,3 +95,22 @@ def forwarded_env(extra: dict[str, str] | None = None) -> dict[str, str]:
     env.update(extra or {})
     return env
 
+
+
+@contextmanager
+def held_interrupts() -> Iterator[None]:
+    """Run the block to its end even if SIGINT comes meanwhile, then deliver that SIGINT as it would have been
+    (KeyboardInterrupt under Python's default handler). Ray cancels a running task and a terminal's Ctrl-C stops
+    a process this way; a write cut short (a LeRobot episode half saved) loses more than the one episode.
+    Outside the main thread, where signals cannot be handled, the block simply runs."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: came.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if came:
+        signal.raise_signal(signal.SIGINT)  # to the handler that was there: raise, ignore or end the process
