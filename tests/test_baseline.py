@@ -134,6 +134,28 @@ def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
             get_recipe("camera", **bad)
 
 
+def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):
+    """A run folder named ``...-shift0.1-seed1000`` has a dot in it; its timing file must not be shared with
+    seed 1001's (a learning curve measures minutes from that run's start)."""
+    from colorsort.training import stages
+
+    def fake_training(cmd: list[str], log: Path) -> float:  # what lerobot-train leaves, in no time
+        run_dir = Path(next(a for a in cmd if a.startswith("--output_dir=")).split("=", 1)[1])
+        earlier = len(list(run_dir.parent.glob("*-seed*/"))) if run_dir.parent.exists() else 0
+        (run_dir / "checkpoints" / "last" / "pretrained_model").mkdir(parents=True)
+        (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").write_text("{}")
+        return 60.0 * (1 + earlier)
+
+    monkeypatch.setattr(stages, "run", fake_training)
+    recipe = get_recipe("camera", image_shift=0.1)
+    first = stages.train(recipe, tmp_path / "demos-48", 100, 1000, tmp_path)
+    second = stages.train(recipe, tmp_path / "demos-48", 100, 1001, tmp_path)
+    assert first[1]["wall_s"] == 60.0 and second[1]["wall_s"] == 120.0
+    assert sorted(p.name for p in (tmp_path / "train").glob("*.json")) == [
+        "demos-48-100steps-shift0.1-seed1000.json", "demos-48-100steps-shift0.1-seed1001.json"]
+    assert stages.train(recipe, tmp_path / "demos-48", 100, 1000, tmp_path) == first  # reused, its own timing
+
+
 def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
     """``boxes_by_variant``: the seed variant's demos hold one box each, in a part named for it, merged."""
     from colorsort.training.stages import collect, size

@@ -110,7 +110,7 @@ def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Pa
 def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
     """``lerobot-train``; the run folder and its timing ``{"started": unix time, "wall_s": s}`` (reused if there)."""
     run_dir = out / "train" / f"{data.name}-{steps}steps{recipe.run_suffix}-seed{seed}"
-    timing_path = run_dir.with_suffix(".json")
+    timing_path = run_dir.with_name(run_dir.name + ".json")  # not with_suffix: "-shift0.1-seed1000" has a dot
     if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
         print(f"reusing {run_dir}")
         set_inference(run_dir, recipe)
