@@ -411,3 +411,20 @@ def test_the_shipped_state_policy_lets_a_distractor_through_where_the_expert_did
     passing = rows["passing: belt running the box past the ray"]
     assert int(decision[1]) >= 2 and int(passing[1]) >= 1
     assert decision[4].strip(" |") == f"{decision[1]} of {decision[1]}"
+
+
+def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
+    """Two seeds' misplaced boxes add up per (colour, bin); correct and dropped boxes and smaller demo counts do not."""
+    from colorsort.training.tables import render
+
+    def row(seed: int, demos: int, boxes: list[tuple[str, str, str | None]]) -> dict:
+        episode = {"boxes": [{"color": c, "outcome": o, "bin": b} for c, o, b in boxes]}
+        return {"demos_tried": demos, "variant": "jitter", "seed": seed, "per_episode": [episode]}
+
+    rows = [row(1000, 48, [("red", "misplaced", "green"), ("blue", "correct", "blue"), ("red", "dropped", None)]),
+            row(1001, 48, [("red", "misplaced", "green"), ("blue", "misplaced", "green")]),
+            row(1000, 8, [("green", "misplaced", "red")])]
+    table = render({"rows": rows}, "mistakes")
+    assert table.splitlines()[2] == "| jitter | 3 | red -> green 2, blue -> green 1 |"
+    clean = [row(1000, 48, [("red", "correct", "red")])]
+    assert render({"rows": clean}, "mistakes").endswith("| every variant | 0 | |")

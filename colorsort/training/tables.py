@@ -12,6 +12,7 @@ test fails when a page differs from what its JSON gives. Kinds:
 
 - ``table``: every scored row (with several training seeds: mean, range and each seed);
 - ``curve``: the learning curve, success on the main variant at each checkpoint;
+- ``mistakes``: where the boxes put in a wrong bin went, box colour -> bin, per variant over every seed;
 - ``headline``: with ``baselines`` as the folder, one line per shipped baseline that has a
   ``scores.json``: its inputs and its success on each variant (the landing page's table).
 """
@@ -20,11 +21,12 @@ from __future__ import annotations
 
 import json
 import re
+from collections import Counter
 from pathlib import Path
 
 from colorsort.training.report import curve_table, summary_table
 
-KINDS = ("table", "curve", "headline")
+KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
 
 
@@ -43,7 +45,27 @@ def render(scores: dict, kind: str) -> str:
             raise ValueError("this baseline's scores.json has no learning curve "
                              "(it saved no checkpoints along the way)")
         return curve_table(scores["curve"])
+    if kind == "mistakes":
+        return mistakes_table(scores["rows"])
     raise ValueError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
+
+
+def mistakes_table(rows: list[dict]) -> str:
+    """A Markdown table: per variant of the largest demo count, its boxes in a wrong bin by colour and the bin
+    they went to ("red -> green 10"), summed over every training seed's episodes; variants without any are left out."""
+    largest = max(r["demos_tried"] for r in rows)
+    counts: dict[str, Counter] = {}
+    for r in rows:
+        if r["demos_tried"] == largest:
+            boxes = (b for e in r["per_episode"] for b in e["boxes"] if b["outcome"] == "misplaced")
+            counts.setdefault(r["variant"], Counter()).update(f"{b['color']} -> {b['bin']}" for b in boxes)
+    lines = ["| variant | boxes in a wrong bin | box colour -> the bin it went to |", "| --- | --- | --- |"]
+    for variant, c in counts.items():
+        if c:
+            lines.append(f"| {variant} | {sum(c.values())} | {', '.join(f'{k} {n}' for k, n in c.most_common())} |")
+    if len(lines) == 2:
+        lines.append("| every variant | 0 | |")
+    return "\n".join(lines)
 
 
 def headline(folder: Path) -> str:
