@@ -117,9 +117,11 @@ def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
 
     from colorsort.training.stages import train_command
 
-    shifted = get_recipe("camera", image_shift=0.1)
+    shifted = get_recipe("camera")
     args = shifted.augment_args()
-    assert get_recipe("camera").augment_args() == [] and shifted.run_suffix == "-shift0.1"
+    assert shifted.image_shift == 0.1 and shifted.run_suffix == "-shift0.1"
+    plain = get_recipe("camera", image_shift=0)
+    assert plain.augment_args() == [] and plain.run_suffix == ""
     assert set(args) <= set(train_command(shifted, tmp_path, 10, 1000, tmp_path / "run"))
     config = draccus.parse(DatasetConfig, args=["--repo_id=local/x", *[a.replace("--dataset.", "--") for a in args]])
     transforms = ImageTransforms(config.image_transforms)
