@@ -430,3 +430,24 @@ def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
     assert table.splitlines()[2] == "| jitter | 3 | red -> green 2, blue -> green 1 |"
     clean = [row(1000, 48, [("red", "correct", "red")])]
     assert render({"rows": clean}, "mistakes").endswith("| every variant | 0 | |")
+
+
+def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):
+    """Reshipping replaces the tracked files of the folder it ships to: that alone is no uncommitted change."""
+    from colorsort.training.ship import commit
+
+    def git(*args: str) -> None:
+        subprocess.run(["git", *args], cwd=tmp_path, check=True, capture_output=True)
+
+    git("init", "-q")
+    (tmp_path / "baselines" / "p").mkdir(parents=True)
+    (tmp_path / "baselines" / "p" / "model.safetensors").write_text("old weights")
+    (tmp_path / "code.py").write_text("x = 1\n")
+    git("add", ".")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "one")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "baselines" / "p" / "model.safetensors").write_text("new weights")
+    assert not commit(Path("baselines/p")).endswith("(with uncommitted changes)")
+    assert commit().endswith("(with uncommitted changes)")
+    (tmp_path / "code.py").write_text("x = 2\n")
+    assert commit(Path("baselines/p")).endswith("(with uncommitted changes)")

@@ -14,12 +14,14 @@ from colorsort.training.report import curve_table, summary_table, table
 from colorsort.variants import get_variant
 
 
-def commit() -> str:
-    """The checkout's commit (marked when it has uncommitted changes), or why there is none."""
+def commit(shipped: Path | None = None) -> str:
+    """The checkout's commit (marked when it has uncommitted changes outside ``shipped``, the folder being
+    shipped, whose tracked files a reship replaces), or why there is none."""
+    exclude = [f":(exclude){shipped.resolve()}"] if shipped is not None else []
     try:
         sha = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
-                               text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ":/", *exclude],
+                               capture_output=True, text=True, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown (not a git checkout)"
     return sha + (" (with uncommitted changes)" if dirty else "")
@@ -80,7 +82,7 @@ LeRobot ACT ({parameters(dest) / 1e6:.2f} M parameters,{backbone} {act.dim_model
 and {act.n_decoder_layers} decoder layers, chunks of {act.chunk_size} actions {execution}, {vae} VAE,
 learning rate {act.optimizer_lr}) on {inputs}. {size_mb:.1f} MB.
 
-Made by `{command}` (recipe `{recipe.name}`) on commit {commit()}, started {results['started']}, on
+Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results['started']}, on
 {machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {boxes}),
 {largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {recipe.batch_size} in
 {largest[0]['train_minutes']:.0f} min of `lerobot-train`. Stages reused from earlier runs of the same command
