@@ -451,3 +451,24 @@ def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_ch
     assert commit().endswith("(with uncommitted changes)")
     (tmp_path / "code.py").write_text("x = 2\n")
     assert commit(Path("baselines/p")).endswith("(with uncommitted changes)")
+
+
+def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
+    """demos/compare_scores.py: each seed's rate, their mean, and box counts summed over the seeds; a variant only
+    one run has gets a dash on the other side."""
+    def row(variant: str, rate: float, correct: int, misplaced: int) -> dict:
+        return {"demos_tried": 48, "variant": variant, "success_rate": rate, "correct": correct,
+                "misplaced": misplaced, "dropped": 0}
+
+    new = {"rows": [row("seed", 1.0, 40, 0), row("seed", 0.5, 20, 10), row("jitter", 0.25, 9, 6)]}
+    old = {"rows": [row("seed", 0.25, 10, 12)]}
+    for name, scores in (("new.json", new), ("old.json", old)):
+        (tmp_path / name).write_text(json.dumps(scores))
+    out = run([sys.executable, str(REPO / "demos" / "compare_scores.py"), "new.json", "old.json", "--labels", "a,b"],
+              tmp_path, 60)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0].startswith("| variant | a: mean (each seed) | b: mean (each seed) |")
+    assert lines[2] == "| `seed` | 75% (100%, 50%) | 25% (25%) | 60 / 10 / 0 | 10 / 12 / 0 |"
+    assert lines[3] == "| `jitter` | 25% (25%) | - | 9 / 6 / 0 | - |"
+    assert lines[4] == "| every variant (mean of the variants' means) | 50% | 25% | | |"

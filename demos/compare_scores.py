@@ -1,0 +1,69 @@
+"""Two runs of a baseline recipe side by side, per variant, from their ``scores.json``.
+
+    python demos/compare_scores.py NEW_scores.json OLD_scores.json [--labels shifted,"not shifted"]
+
+For each variant of the largest demo count: the mean success over the training seeds with each seed's,
+then the boxes put in the right bin, a wrong bin and dropped, summed over every seed's episodes; last, the
+mean over the variants. An older
+run's ``scores.json`` comes from git: ``git show COMMIT:baselines/NAME/scores.json > old.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+
+def by_variant(scores: dict) -> dict[str, list[dict]]:
+    """The rows of the largest demo count, grouped by variant in their order."""
+    largest = max(r["demos_tried"] for r in scores["rows"])
+    groups: dict[str, list[dict]] = {}
+    for r in scores["rows"]:
+        if r["demos_tried"] == largest:
+            groups.setdefault(r["variant"], []).append(r)
+    return groups
+
+
+def cells(rows: list[dict] | None) -> tuple[str, str]:
+    """("67% (100%, 85%, 15%)", "87 / 0 / 20"): mean success (each seed), right / wrong bin / dropped."""
+    if not rows:
+        return "-", "-"
+    rates = ", ".join(f"{100 * r['success_rate']:.0f}%" for r in rows)
+    success = f"{mean_rate(rows):.0f}% ({rates})"
+    return success, " / ".join(str(sum(r[k] for r in rows)) for k in ("correct", "misplaced", "dropped"))
+
+
+def mean_rate(rows: list[dict]) -> float:
+    """[%] the mean success of a variant's seeds."""
+    return 100 * sum(r["success_rate"] for r in rows) / len(rows)
+
+
+def compare(new: dict, old: dict, labels: tuple[str, str]) -> str:
+    """The Markdown table of ``new`` beside ``old``, one line per variant of either."""
+    a, b = by_variant(new), by_variant(old)
+    head = [f"{labels[0]}: mean (each seed)", f"{labels[1]}: mean (each seed)",
+            f"{labels[0]}: right / wrong bin / dropped", f"{labels[1]}: right / wrong bin / dropped"]
+    lines = ["| variant | " + " | ".join(head) + " |", "| --- |" + " --- |" * len(head)]
+    for variant in [*a, *(v for v in b if v not in a)]:
+        (sa, ba), (so, bo) = cells(a.get(variant)), cells(b.get(variant))
+        lines.append(f"| `{variant}` | {sa} | {so} | {ba} | {bo} |")
+    means = [f"{sum(mean_rate(g) for g in groups.values()) / len(groups):.0f}%" for groups in (a, b)]
+    lines.append(f"| every variant (mean of the variants' means) | {means[0]} | {means[1]} | | |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("new", type=Path)
+    p.add_argument("old", type=Path)
+    p.add_argument("--labels", default="new,old", help="two comma-separated column labels")
+    args = p.parse_args()
+    labels = tuple(args.labels.split(","))
+    if len(labels) != 2:
+        raise SystemExit(f"--labels takes two comma-separated labels, got {args.labels!r}")
+    print(compare(json.loads(args.new.read_text()), json.loads(args.old.read_text()), labels))
+
+
+if __name__ == "__main__":
+    main()
