@@ -89,8 +89,9 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     info = json.loads((out / "data" / "demos-1-late100" / "meta" / "info.json").read_text())
     assert {"observation.images.sensor", "observation.images.wrist"} <= set(info["features"])
     assert "observation.environment_state" not in info["features"]
-    model = out / "train" / "demos-1-late100-2steps-seed1000" / "checkpoints" / "last" / "pretrained_model"
+    model = out / "train" / "demos-1-late100-2steps-shift0.1-seed1000" / "checkpoints" / "last" / "pretrained_model"
     config = json.loads((model / "config.json").read_text())
+    assert json.loads((model / "train_config.json").read_text())["dataset"]["image_transforms"]["enable"]  # shifts
     assert set(config["input_features"]) == {"observation.state", "observation.images.sensor",
                                              "observation.images.wrist"}
     assert config["input_features"]["observation.images.wrist"]["shape"] == [3, 32, 32]
