@@ -1,6 +1,9 @@
 """The benchmark: Gymnasium ids, variants, the evaluation harness, and LeRobot policies on the task."""
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -15,6 +18,7 @@ from colorsort.config import BIN_COLORS, COLORS
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
+REPO = Path(__file__).resolve().parent.parent
 
 
 @pytest.mark.parametrize("gym_id", [DEFAULT_GYM_ID] + [v.gym_id for v in VARIANTS.values()])
@@ -62,6 +66,18 @@ def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(capsys
     with pytest.raises(SystemExit) as exit_info:
         eval_main(["--episodes", "1", "--envs", "0"])
     assert exit_info.value.code == 2 and "--envs 0: give at least 1" in capsys.readouterr().err
+
+
+def test_each_box_of_an_episode_says_where_it_was_set_down():
+    """On `jitter` the boxes lie off the centre line and turned, within the variant's ranges; on `default` on it."""
+    jitter = evaluate("expert", "jitter", episodes=1, progress=False, **SMALL)
+    plain = evaluate("expert", "default", episodes=1, progress=False, **SMALL)
+    boxes = jitter.per_episode[0]["boxes"]
+    config = VARIANTS["jitter"].task_config
+    assert len(boxes) == VARIANTS["jitter"].boxes and all(b["outcome"] == "placed" for b in boxes)
+    assert all(abs(b["offset"]) <= config.lateral_jitter and abs(b["yaw"]) <= config.yaw_jitter for b in boxes)
+    assert len({(b["offset"], b["yaw"]) for b in boxes}) == len(boxes) and any(abs(b["yaw"]) > 1.0 for b in boxes)
+    assert all(b["offset"] == 0.0 and b["yaw"] == 0.0 for b in plain.per_episode[0]["boxes"])
 
 
 def test_distractors_are_let_through_and_counted():
@@ -125,3 +141,20 @@ def test_eval_takes_a_checkpoints_cameras_unless_told_and_refuses_others(tmp_pat
         observation_settings(state_only, "scene,wrist", None)
     with pytest.raises(ValueError, match="96x96"):
         observation_settings(vision, None, 128)
+
+
+def test_outcomes_by_pose_counts_each_band(tmp_path):
+    """demos/outcomes_by_pose.py: each box in exactly one band of |yaw| and one of offset; wrong bins and drops
+    counted where they lie; the top edge (45 deg) belongs to the last band."""
+    boxes = [{"outcome": "placed", "offset": -0.04, "yaw": 5.0}, {"outcome": "misplaced", "offset": 0.01, "yaw": -20.0},
+             {"outcome": "misplaced", "offset": 0.03, "yaw": 45.0}, {"outcome": "dropped", "offset": 0.01, "yaw": 29.0},
+             {"outcome": "let_through", "offset": 0.0, "yaw": 0.0}]
+    (tmp_path / "eval.json").write_text(json.dumps({"per_episode": [{"boxes": boxes}]}))
+    out = subprocess.run([sys.executable, str(REPO / "demos" / "outcomes_by_pose.py"), "eval.json"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    rows = out.stdout.splitlines()[3:]
+    assert rows[:3] == ["| |yaw| 0 to 15 deg | 1 | 0 (0%) | 0 |", "| |yaw| 15 to 30 deg | 2 | 1 (50%) | 1 |",
+                        "| |yaw| 30 to 45 deg | 1 | 1 (100%) | 0 |"]
+    assert rows[3:] == ["| offset -5 to -2.5 cm | 1 | 0 (0%) | 0 |", "| offset -2.5 to 0 cm | 0 | 0 (-) | 0 |",
+                        "| offset 0 to 2.5 cm | 2 | 1 (50%) | 1 |", "| offset 2.5 to 5 cm | 1 | 1 (100%) | 0 |"]

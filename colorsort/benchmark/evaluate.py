@@ -97,7 +97,9 @@ class _Runner:
                 film.discard()
             raise
         ended = "success" if info["is_success"] else "failed" if info["failed"] else "time limit"
-        boxes = [{"time": e.time, "color": e.color, "outcome": e.outcome.value, "bin": e.bin}
+        placed = {p.serial: p for p in self.env.env.placements}
+        boxes = [{"time": e.time, "color": e.color, "outcome": e.outcome.value, "bin": e.bin,
+                  "offset": round(placed[e.serial].offset, 4), "yaw": round(placed[e.serial].yaw, 2)}
                  for e in self.env.env.events[: self.env.variant.boxes]]
         result = {"seed": seed, "success": bool(info["is_success"]), "ended": ended, "steps": self.env.steps,
                   **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through", "distractors", "sim_time",

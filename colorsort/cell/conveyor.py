@@ -7,6 +7,8 @@ never travels but every contact sees it moving: boxes resting on it are carried 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
@@ -68,6 +70,16 @@ class Belt:
             self.travel += self.speed * self.timestep
 
 
+@dataclass(frozen=True)
+class Placement:
+    """Where a box was set down on the belt."""
+
+    serial: int
+    color: str
+    offset: float  # [m] from the belt's centre line, + toward the bins
+    yaw: float  # [deg] about z
+
+
 class Spawner:
     """A box from the pool every ``spawn_period`` [s] at the belt's upstream end.
 
@@ -77,6 +89,8 @@ class Spawner:
     Attributes:
         next_time: [s] sim time of the next spawn.
         next_serial: the serial the next box gets.
+        placed: every box set down since the reset, in order (like the referee's events, a record of the
+            episode, not part of the sim state).
     """
 
     def __init__(self, pool: BoxPool, config: TaskConfig):
@@ -85,6 +99,7 @@ class Spawner:
 
     def reset(self) -> None:
         self.next_time, self.next_serial = 0.0, 0
+        self.placed: list[Placement] = []
 
     def get_state(self) -> tuple[float, int]:
         """(next spawn time [s], next serial)."""
@@ -96,6 +111,8 @@ class Spawner:
     def put(self, box: Box, color: str, x: float, y: float, yaw: float) -> None:
         """Set ``box`` down on the belt at (x, y) [m], turned ``yaw`` [rad], with the next serial."""
         self.pool.place(box, color, x, y, yaw, self.next_serial)
+        offset = float(y - self.pool.layout.belt_y)
+        self.placed.append(Placement(self.next_serial, color, offset, float(np.rad2deg(yaw))))
         self.next_serial += 1
 
     def spawn_if_due(self, now: float, rng: np.random.Generator) -> Box | None:

@@ -25,6 +25,7 @@ from robosuite.utils.observables import Observable, sensor
 
 from colorsort.cell import cameras
 from colorsort.cell.boxes import Box
+from colorsort.cell.conveyor import Placement
 from colorsort.cell.models.arena import ConveyorArena
 from colorsort.cell.plant import Plant
 from colorsort.cell.referee import BoxEvent, Tally
@@ -200,6 +201,12 @@ class ColorSort(ManipulationEnv):
     def events(self) -> list[BoxEvent]:
         """Every box that left play this episode, in order (``referee.BoxEvent``)."""
         return self.plant.referee.events
+
+    @property
+    def placements(self) -> list[Placement]:
+        """Every box set down on the belt this episode, in order: serial, colour, offset, yaw
+        (``conveyor.Placement``)."""
+        return self.plant.spawner.placed
 
     @property
     def tally(self) -> Tally:
