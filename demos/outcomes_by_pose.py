@@ -4,8 +4,8 @@
     python demos/outcomes_by_pose.py outputs/jitter.json
 
 Reads the ``per_episode`` boxes of ``colorsort-eval --json`` files (each box's ``offset`` [m] from the belt's
-centre line and ``yaw`` [deg]) and prints, per band of |yaw| and of the offset, how many boxes there were and
-how many went into a wrong bin or were dropped.
+centre line and ``yaw`` [deg]) and prints, per band of |yaw| (``turned``, either way) and of the offset, how
+many boxes there were and how many went into a wrong bin or were dropped.
 """
 
 from __future__ import annotations
@@ -41,11 +41,11 @@ def main() -> None:
     if not boxes or "yaw" not in boxes[0]:
         raise SystemExit("no boxes with offset and yaw: write the files with this version's colorsort-eval --json")
     for b in boxes:
-        b["|yaw|"] = abs(b["yaw"])
+        b["turned"] = abs(b["yaw"])
     print(f"{len(boxes)} boxes of {', '.join(map(str, args.evals))}")
     print("| band | boxes | in a wrong bin | dropped |")
     print("| --- | --- | --- | --- |")
-    print("\n".join(bands(boxes, "|yaw|", YAW_BANDS, 1, "deg") + bands(boxes, "offset", OFFSET_BANDS, 100, "cm")))
+    print("\n".join(bands(boxes, "turned", YAW_BANDS, 1, "deg") + bands(boxes, "offset", OFFSET_BANDS, 100, "cm")))
 
 
 if __name__ == "__main__":

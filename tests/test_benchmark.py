@@ -154,7 +154,7 @@ def test_outcomes_by_pose_counts_each_band(tmp_path):
                          capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     rows = out.stdout.splitlines()[3:]
-    assert rows[:3] == ["| |yaw| 0 to 15 deg | 1 | 0 (0%) | 0 |", "| |yaw| 15 to 30 deg | 2 | 1 (50%) | 1 |",
-                        "| |yaw| 30 to 45 deg | 1 | 1 (100%) | 0 |"]
+    assert rows[:3] == ["| turned 0 to 15 deg | 1 | 0 (0%) | 0 |", "| turned 15 to 30 deg | 2 | 1 (50%) | 1 |",
+                        "| turned 30 to 45 deg | 1 | 1 (100%) | 0 |"]
     assert rows[3:] == ["| offset -5 to -2.5 cm | 1 | 0 (0%) | 0 |", "| offset -2.5 to 0 cm | 0 | 0 (-) | 0 |",
                         "| offset 0 to 2.5 cm | 2 | 1 (50%) | 1 |", "| offset 2.5 to 5 cm | 1 | 1 (100%) | 0 |"]
