@@ -4,8 +4,8 @@
 
 For each variant of the largest demo count: the mean success over the training seeds with each seed's,
 then the boxes put in the right bin, a wrong bin and dropped, summed over every seed's episodes; last, the
-mean over the variants. An older
-run's ``scores.json`` comes from git: ``git show COMMIT:baselines/NAME/scores.json > old.json``.
+mean over the variants. An older run's ``scores.json`` comes from git:
+``git show COMMIT:baselines/NAME/scores.json > old.json``.
 """
 
 from __future__ import annotations
@@ -14,15 +14,7 @@ import argparse
 import json
 from pathlib import Path
 
-
-def by_variant(scores: dict) -> dict[str, list[dict]]:
-    """The rows of the largest demo count, grouped by variant in their order."""
-    largest = max(r["demos_tried"] for r in scores["rows"])
-    groups: dict[str, list[dict]] = {}
-    for r in scores["rows"]:
-        if r["demos_tried"] == largest:
-            groups.setdefault(r["variant"], []).append(r)
-    return groups
+from colorsort.training.tables import largest_by_variant
 
 
 def cells(rows: list[dict] | None) -> tuple[str, str]:
@@ -41,7 +33,7 @@ def mean_rate(rows: list[dict]) -> float:
 
 def compare(new: dict, old: dict, labels: tuple[str, str]) -> str:
     """The Markdown table of ``new`` beside ``old``, one line per variant of either."""
-    a, b = by_variant(new), by_variant(old)
+    a, b = largest_by_variant(new["rows"]), largest_by_variant(old["rows"])
     head = [f"{labels[0]}: mean (each seed)", f"{labels[1]}: mean (each seed)",
             f"{labels[0]}: right / wrong bin / dropped", f"{labels[1]}: right / wrong bin / dropped"]
     lines = ["| variant | " + " | ".join(head) + " |", "| --- |" + " --- |" * len(head)]

@@ -96,7 +96,6 @@ def forwarded_env(extra: dict[str, str] | None = None) -> dict[str, str]:
     return env
 
 
-
 @contextmanager
 def held_interrupts() -> Iterator[None]:
     """Run the block to its end even if SIGINT comes meanwhile, then deliver that SIGINT as it would have been

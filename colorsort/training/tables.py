@@ -50,15 +50,22 @@ def render(scores: dict, kind: str) -> str:
     raise ValueError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
 
 
+def largest_by_variant(rows: list[dict]) -> dict[str, list[dict]]:
+    """The rows of the largest demo count, one list per variant (one row per training seed), in their order."""
+    largest = max(r["demos_tried"] for r in rows)
+    groups: dict[str, list[dict]] = {}
+    for r in rows:
+        if r["demos_tried"] == largest:
+            groups.setdefault(r["variant"], []).append(r)
+    return groups
+
+
 def mistakes_table(rows: list[dict]) -> str:
     """A Markdown table: per variant of the largest demo count, its boxes in a wrong bin by colour and the bin
     they went to ("red -> green 10"), summed over every training seed's episodes; variants without any are left out."""
-    largest = max(r["demos_tried"] for r in rows)
-    counts: dict[str, Counter] = {}
-    for r in rows:
-        if r["demos_tried"] == largest:
-            boxes = (b for e in r["per_episode"] for b in e["boxes"] if b["outcome"] == "misplaced")
-            counts.setdefault(r["variant"], Counter()).update(f"{b['color']} -> {b['bin']}" for b in boxes)
+    counts = {variant: Counter(f"{b['color']} -> {b['bin']}" for r in group for e in r["per_episode"]
+                               for b in e["boxes"] if b["outcome"] == "misplaced")
+              for variant, group in largest_by_variant(rows).items()}
     lines = ["| variant | boxes in a wrong bin | box colour -> the bin it went to |", "| --- | --- | --- |"]
     for variant, c in counts.items():
         if c:
@@ -75,11 +82,8 @@ def headline(folder: Path) -> str:
              "mean and range over the seeds) |", "| --- | --- | --- | --- |"]
     for path in sorted(folder.glob("*/scores.json")):
         scores = json.loads(path.read_text())
-        rows = scores["rows"]
-        largest = [r for r in rows if r["demos_tried"] == max(x["demos_tried"] for x in rows)]
-        by_variant: dict[str, list[dict]] = {}
-        for r in largest:
-            by_variant.setdefault(r["variant"], []).append(r)
+        by_variant = largest_by_variant(scores["rows"])
+        largest = [r for group in by_variant.values() for r in group]
         cells = [variant_cell(v, g) for v, g in by_variant.items()]
         first = largest[0]
         minutes = [r["train_minutes"] for r in largest]
