@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 import pytest
 
+from colorsort.cli import baseline as colorsort_baseline
 from colorsort.cli.eval import main as eval_main
 from colorsort.training.recipes import RECIPES, get_recipe
 
@@ -167,6 +168,20 @@ def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
     root = collect(recipe, 1, tmp_path, workers=1)
     part = tmp_path / "data" / "seed-1-b1"
     assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["boxes_per_episode"] == 1
+    assert size(root) == size(part) and size(root)[0] == 1
+
+
+def test_a_recipe_without_the_turn_collects_its_demos_with_no_turn(tmp_path):
+    """``turn_to_box=False`` (``--no-turn``) reaches colorsort-collect and names the parts and the set."""
+    from colorsort.training.stages import collect, size
+
+    assert colorsort_baseline.overrides(colorsort_baseline.parse_args(["--no-turn"])) == {"turn_to_box": False}
+    recipe = get_recipe("state", train_mix=(("jitter", 1),), demos=(1,), boxes_per_episode=1, late_pass=0,
+                        turn_to_box=False)
+    root = collect(recipe, 1, tmp_path, workers=1)
+    part = tmp_path / "data" / "jitter-1-noturn"
+    assert root.name == "demos-1-noturn"
+    assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["turn_to_box"] is False
     assert size(root) == size(part) and size(root)[0] == 1
 
 

@@ -72,6 +72,16 @@ def test_resume_with_other_settings_is_refused(tiny_dataset, tmp_path):
         collect(CollectConfig(out=str(copy), resume=True, **{**TINY, "image_size": (96, 96)}), progress=False)
 
 
+def test_resume_without_the_turn_is_refused_and_older_datasets_resume_as_before(tiny_dataset, tmp_path):
+    """``turn_to_box`` is a setting of the data: recorded when off, absent (as in older datasets) when on."""
+    assert "turn_to_box" not in CollectConfig(**TINY).settings()
+    assert CollectConfig(**TINY, turn_to_box=False).settings()["turn_to_box"] is False
+    copy = tmp_path / "copy"
+    shutil.copytree(tiny_dataset, copy)
+    with pytest.raises(ValueError, match="turn_to_box"):
+        collect(CollectConfig(out=str(copy), resume=True, **{**TINY, "turn_to_box": False}), progress=False)
+
+
 def test_interrupted_run_keeps_finished_episodes_and_resume_completes_it(tiny_dataset, tmp_path, monkeypatch):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 

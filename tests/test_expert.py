@@ -1,19 +1,22 @@
 """The scripted expert sorts by what its camera sees, waits for the sensor, lets unknown boxes through."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from colorsort.cli.sort import main as sort_main
+from colorsort.expert.config import STOPPING_EXPERT
 from colorsort.expert.factory import make_expert
+from colorsort.expert.planning import site_yaw
 from colorsort.expert.sorter import Phase
 
 
-def make_expert_env(make_env, robot="IRB140", **kwargs):
+def make_expert_env(make_env, robot="IRB140", config=None, **kwargs):
     env = make_env(robot, has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor"], **kwargs)
     obs = env.reset()
-    expert = make_expert(env)
+    expert = make_expert(env, config)
     expert.reset(obs)
     return env, expert, obs
 
@@ -45,6 +48,23 @@ def test_picks_off_centre_turned_boxes(make_env):
     env, expert, obs = make_expert_env(make_env, lateral_jitter=0.05, yaw_jitter=45.0, seed=4)
     run_until(env, expert, obs, boxes=3, max_time=25.0)
     assert_all_in_their_bins(env, 3)
+
+
+@pytest.mark.parametrize("turn", [True, False])
+def test_turns_the_cup_to_a_turned_box_only_when_asked(turn, make_env):
+    config = replace(STOPPING_EXPERT, turn_to_box=turn)
+    env, expert, obs = make_expert_env(make_env, config=config, lateral_jitter=0.05, yaw_jitter=45.0, seed=4)
+    picks = {}  # by identity: each pick planned, in order
+    run_until(env, expert, obs, boxes=3, max_time=25.0,
+              on_step=lambda a, o, i: picks.setdefault(id(expert.pick), expert.pick))
+    assert_all_in_their_bins(env, 3)
+    box_yaws = np.deg2rad([p.yaw for p in env.placements[:3]])
+    planned = [p for p in picks.values() if p is not None][:3]
+    cup_turns = [site_yaw(expert.ik.cup_pose(p.contact)[1]) - expert.cup_yaw for p in planned]
+    quarter = lambda a: (np.asarray(a) + np.pi / 4) % (np.pi / 2) - np.pi / 4  # noqa: E731 - a cube's yaw
+    assert np.abs(quarter(box_yaws)).max() > np.deg2rad(15)  # the boxes were turned
+    want = quarter(box_yaws) if turn else np.zeros(3)
+    np.testing.assert_allclose(quarter(np.subtract(cup_turns, want)), 0, atol=np.deg2rad(3))
 
 
 @pytest.mark.parametrize("robot", ["Panda", "UR5e"])

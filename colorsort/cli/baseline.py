@@ -45,6 +45,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                                             "VARIANT:WEIGHT (default: the recipe's mix)")
     p.add_argument("--boxes-per-episode", type=int)
     p.add_argument("--late-pass", type=int, help="colorsort-collect's --late-pass for the demos [control steps]")
+    p.add_argument("--no-turn", action="store_true",
+                   help="demos in which the expert keeps the cup's home yaw over a turned box (colorsort-collect's)")
     p.add_argument("--steps", type=int, help="training updates for the largest set")
     p.add_argument("--small-steps", type=int, help="training updates for the smaller sets")
     p.add_argument("--passes", type=float, help="train every set for this many passes over its frames instead")
@@ -85,6 +87,8 @@ def overrides(args: argparse.Namespace) -> dict:
         found["eval_variants"] = tuple(args.eval_variants.split(","))
     if args.cameras:
         found["cameras"] = () if args.cameras == "none" else tuple(args.cameras.split(","))
+    if args.no_turn:
+        found["turn_to_box"] = False
     if args.lr_schedule:
         found["act"] = replace(get_recipe(args.recipe).act, lr_schedule=args.lr_schedule)
     for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",

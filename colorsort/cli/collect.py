@@ -72,6 +72,8 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--late-pass", type=int, default=d.late_pass,
                         help="hold each belt-pass command back 0..N control steps, storing the expert's action: "
                              "demos of the states a policy reaches when it lets a box through late (default 0: off)")
+    parser.add_argument("--no-turn", action="store_true",
+                        help="the expert keeps the cup at its home yaw over a turned box instead of turning to it")
     parser.add_argument("--resume", action="store_true", help="add the missing episodes to an existing dataset")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset")
     args = parser.parse_args(argv)
@@ -89,7 +91,7 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
             cameras=parse_cameras(args.cameras),
             image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
             executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
-            late_pass=args.late_pass, resume=args.resume, overwrite=args.overwrite)
+            late_pass=args.late_pass, turn_to_box=not args.no_turn, resume=args.resume, overwrite=args.overwrite)
     except ValueError as err:
         parser.error(str(err))  # exits with status 2
         raise

@@ -37,6 +37,7 @@ class CollectConfig:
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
     # [control steps] hold each belt pass back 0..late_pass steps; stored actions stay the expert's (late_pass.py)
     late_pass: int = 0
+    turn_to_box: bool = True  # the expert turns the cup to a turned box; False: it keeps its home yaw (ExpertConfig)
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
 
@@ -72,7 +73,10 @@ class CollectConfig:
         """The settings every episode of one dataset must share (checked on --resume)."""
         keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps",
                 "vcodec", "late_pass")
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
+        settings = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
+        if not self.turn_to_box:  # recorded only when off: datasets from before the option resume as they did
+            settings["turn_to_box"] = False
+        return settings
 
     @property
     def executor_config(self) -> ExecutorConfig:

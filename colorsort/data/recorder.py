@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 import traceback
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +22,7 @@ from colorsort.data.config import CollectConfig
 from colorsort.data.late_pass import LatePass
 from colorsort.data.schema import features, frame, task_text
 from colorsort.executors.base import held_interrupts
-from colorsort.expert.factory import make_expert
+from colorsort.expert.factory import expert_preset, make_expert
 from colorsort.variants import get_variant
 
 STAGES = ("setup", "expert", "physics and control", "rendering", "frames to lerobot", "episode saving")
@@ -88,7 +88,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     sec = out.seconds
     t0 = time.perf_counter()
     env = make_recording_env(config)
-    expert = make_expert(env)
+    expert = make_expert(env, replace(expert_preset(env.config.tracking), turn_to_box=config.turn_to_box))
     late = LatePass(config.late_pass)
     lighting = get_variant(config.variant).lighting if config.variant else None
     out.sim_state = env.sim_state_layout.describe()

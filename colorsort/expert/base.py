@@ -168,6 +168,11 @@ class Expert:
         self.cycles.append(cycle)
         return t, cycle
 
+    def turn(self, t: Detection) -> float:
+        """The cup's turn [rad] from its home yaw for box ``t``: the cube's yaw nearest the cup's, in [-45, 45) deg,
+        or 0 when ``config.turn_to_box`` is off."""
+        return t.yaw if self.config.turn_to_box else 0.0
+
     def _next_drop(self, color: str) -> np.ndarray:
         """The joint angles [rad] of the next release point over the ``color`` bin (the slots in turn)."""
         slots = self.q_drop[color]

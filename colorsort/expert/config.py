@@ -35,6 +35,9 @@ class ExpertConfig:
         track_lift_time: [s] then up until the box's bottom is ``track_lift_gap`` over the belt, still moving
             with it; from there it goes to its bin.
         track_lift_gap: [m] the box's bottom over the belt when the tracking ends (the rails stand 2 cm high).
+        turn_to_box: turn the cup to the box's yaw as seen by the sensor; False keeps the cup at its home
+            yaw over every box (the 60 mm pad seals on a cube turned any way), so a turned box's demo moves
+            the wrist as an unturned one's does.
     """
 
     motion: MotionConfig = field(default_factory=MotionConfig)
@@ -56,6 +59,7 @@ class ExpertConfig:
     track_hold_time: float = 0.05
     track_lift_time: float = 0.15
     track_lift_gap: float = 0.05
+    turn_to_box: bool = True
 
     def __post_init__(self) -> None:
         check_range("carry_z", self.carry_z, 0.4, 1.2)

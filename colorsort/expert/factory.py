@@ -14,6 +14,11 @@ if TYPE_CHECKING:
     from colorsort.cell.env import ColorSort
 
 
+def expert_preset(tracking: bool) -> ExpertConfig:
+    """The expert's settings for a belt: ``TRACKING_EXPERT`` on a tracking one, ``STOPPING_EXPERT`` otherwise."""
+    return TRACKING_EXPERT if tracking else STOPPING_EXPERT
+
+
 def make_expert(env: ColorSort, config: ExpertConfig | None = None) -> Expert:
     """A ``SortingExpert`` on a stopping belt, a ``TrackingExpert`` on a tracking one, calibrated on ``env``;
     ``config`` defaults to the belt's preset (``STOPPING_EXPERT``, ``TRACKING_EXPERT``).
@@ -25,7 +30,7 @@ def make_expert(env: ColorSort, config: ExpertConfig | None = None) -> Expert:
     if not env.has_offscreen_renderer:
         raise ValueError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
     tracking = env.config.tracking
-    config = config or (TRACKING_EXPERT if tracking else STOPPING_EXPERT)
+    config = config or expert_preset(tracking)
     size, image = sensor_source(env, config.sensor_image_size)
     cls = TrackingExpert if tracking else SortingExpert
     return cls(Calibration.from_env(env, size), image, config)

@@ -109,7 +109,7 @@ class SortingExpert(Expert):
 
     def _plan_pick(self, t: Detection) -> PickPlan:
         L, cfg = self.layout, self.config
-        yaw = self.cup_yaw + t.yaw  # the cube's yaw nearest the cup's: t.yaw is in [-45, 45) deg
+        yaw = self.cup_yaw + self.turn(t)
         x, y = t.center[0], t.center[1]
         top = L.belt_top_z + L.box_size
         above = self.ik.solve(Waypoint("above box", (x, y, top + cfg.approach_gap), yaw), self.q_wait)

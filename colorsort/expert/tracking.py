@@ -191,7 +191,7 @@ class TrackingExpert(Expert):
         t, cycle = self._look(obs)
         if t is not None and cycle.target_bin is not None:
             x, y = float(t.center[0]), float(t.center[1])
-            self.queue.append(Sighting(cycle, x, y, self.cup_yaw + t.yaw, self.travel))
+            self.queue.append(Sighting(cycle, x, y, self.cup_yaw + self.turn(t), self.travel))
         else:
             cycle.done_at = self.time  # let through: nothing to do
 

@@ -118,6 +118,8 @@ class Recipe:
             number of boxes (``seed`` brings a box every 30 s: one box a demo keeps its idle frames few).
         late_pass: the collector's ``--late-pass`` [control steps]: demos that show the states a
             chunking policy reaches when it lets a box through late (``colorsort.data.late_pass``).
+        turn_to_box: the expert turns the cup to a turned box in the demos; False: the collector's
+            ``--no-turn`` (the cup keeps its home yaw, so turned boxes' demos move the wrist as others do).
         steps: training updates of the largest set.
         small_steps: training updates of the smaller sets.
         passes: when set, every set trains for this many passes over its frames instead
@@ -145,6 +147,7 @@ class Recipe:
     boxes_per_episode: int = 3
     boxes_by_variant: tuple[tuple[str, int], ...] = ()
     late_pass: int = 0
+    turn_to_box: bool = True
     steps: int = 6000
     small_steps: int = 2500
     passes: float | None = None
@@ -261,7 +264,7 @@ class Recipe:
     @property
     def data_suffix(self) -> str:
         """What sets this recipe's demos apart from plain expert demos in folder names."""
-        return f"-late{self.late_pass}" if self.late_pass else ""
+        return (f"-late{self.late_pass}" if self.late_pass else "") + ("" if self.turn_to_box else "-noturn")
 
     def episodes_on(self, variant: str) -> int:
         return self.eval_episodes if variant == self.main_variant else self.other_episodes

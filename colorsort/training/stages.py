@@ -3,7 +3,8 @@
 Layout of the working folder ``out``::
 
     data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-b<B>: B boxes a demo
-                              where the recipe's boxes_by_variant says so; -late<L>: --late-pass L)
+                              where the recipe's boxes_by_variant says so; -late<L>: --late-pass L;
+                              -noturn: --no-turn)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
     train/demos-<N>-<S>steps[-cos][-shift<F>]-seed<K>/  lerobot-train's run of S updates with seed K
                               (-cos: cosine learning rate; -shift<F>: images shifted up to F); <run>.json its timing
@@ -65,7 +66,7 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
                  "--boxes-per-episode", str(boxes), "--seed", str(SEED_STRIDE * k),
                  "--cameras", ",".join(recipe.cameras) or "none", "--image-size", str(recipe.image_size),
                  "--late-pass", str(recipe.late_pass), "--workers", str(workers), "--out", str(part),
-                 "--repo-id", REPO_ID],
+                 "--repo-id", REPO_ID] + ([] if recipe.turn_to_box else ["--no-turn"]),
                 out / "logs" / f"collect-{part.name}.log")
         else:
             print(f"reusing {part}")
