@@ -488,3 +488,12 @@ def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
     assert lines[2] == "| `seed` | 75% (100%, 50%) | 25% (25%) | 60 / 10 / 0 | 10 / 12 / 0 |"
     assert lines[3] == "| `jitter` | 25% (25%) | - | 9 / 6 / 0 | - |"
     assert lines[4] == "| every variant (mean of the variants' means) | 50% | 25% | | |"
+
+
+def test_loading_a_checkpoint_prints_nothing_into_a_benchmarks_recorded_figures(capsys):
+    """LeRobot's "Loading weights from local directory" stays out of stdout, which demos/*.py record to docs/results."""
+    from colorsort.benchmark.policies import LeRobotPolicy
+
+    capsys.readouterr()
+    LeRobotPolicy(SHIPPED["act-state"])
+    assert capsys.readouterr().out == ""

@@ -6,6 +6,8 @@ Each takes Gymnasium observations of a ``ColorSortGymEnv`` and returns its actio
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 from pathlib import Path
 from typing import Any, Protocol
@@ -76,7 +78,8 @@ class LeRobotPolicy:
         self.name = str(path)
         config = PreTrainedConfig.from_pretrained(path)
         config.pretrained_path, config.device = path, device
-        self.policy = get_policy_class(config.type).from_pretrained(path, config=config)
+        with contextlib.redirect_stdout(io.StringIO()):  # LeRobot prints "Loading weights from local directory"
+            self.policy = get_policy_class(config.type).from_pretrained(path, config=config)
         self.policy.eval()
         self.preprocessor, self.postprocessor = make_pre_post_processors(
             policy_cfg=config, pretrained_path=str(path),
