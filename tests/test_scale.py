@@ -208,6 +208,32 @@ def test_an_interrupt_during_held_interrupts_comes_after_the_block():
         signal.signal(signal.SIGINT, previous)
 
 
+def test_rays_cancel_during_held_interrupts_stops_the_task_after_the_block(cluster, tmp_path):
+    """Ray cancels a task with a simulated SIGINT; the task's real SIGINT does nothing, so the held interrupt
+    must be delivered by calling the handler (CI caught a cancelled collection that ran to its end)."""
+    inside, flag = tmp_path / "inside", str(tmp_path / "inside")
+
+    def task() -> str:
+        from colorsort.executors.base import held_interrupts
+
+        try:
+            with held_interrupts():
+                Path(flag).touch()
+                time.sleep(2.0)
+            time.sleep(30.0)
+            return "ran to its end"
+        except KeyboardInterrupt:
+            return "stopped after the block"
+
+    started = time.monotonic()
+    ref = ray.remote(task).remote()
+    while not inside.exists():
+        time.sleep(0.02)
+    ray.cancel(ref)
+    assert ray.get(ref, timeout=60) == "stopped after the block"
+    assert time.monotonic() - started < 25
+
+
 def test_an_interrupt_while_an_episode_saves_keeps_that_episode(reference, monkeypatch, tmp_path):
     """Ray cancels a task with a SIGINT, which can land while LeRobot saves an episode (CI caught a run that
     lost both its shards this way): the save ends first, then the shard stops, every saved episode kept."""
