@@ -5,7 +5,9 @@
 
 Reads the ``per_episode`` boxes of ``colorsort-eval --json`` files (each box's ``offset`` [m] from the belt's
 centre line and ``yaw`` [deg]) and prints, per band of |yaw| (``turned``, either way) and of the offset, how
-many boxes there were and how many went into a wrong bin or were dropped.
+many boxes there were and how many went into a wrong bin or were dropped. Where the files have how the cup
+held each box (``grip_offset`` [m] off the cup's axis, ``grip_yaw`` [deg] against the cup), the same per
+band of those, over the boxes that were picked, with the median and 90th percentile of each.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ from pathlib import Path
 
 YAW_BANDS = ((0.0, 15.0), (15.0, 30.0), (30.0, 45.0))  # [deg] |yaw|
 OFFSET_BANDS = ((-0.05, -0.025), (-0.025, 0.0), (0.0, 0.025), (0.025, 0.05))  # [m], + toward the bins
+GRIP_OFFSET_BANDS = ((0.0, 0.005), (0.005, 0.01), (0.01, 0.02), (0.02, 0.06))  # [m] off the cup's axis
+GRIP_YAW_BANDS = ((0.0, 5.0), (5.0, 15.0), (15.0, 45.0))  # [deg] |turn| against the cup
 
 
 def bands(boxes: list[dict], key: str, edges: tuple[tuple[float, float], ...], scale: float, unit: str) -> list[str]:
@@ -32,6 +36,14 @@ def bands(boxes: list[dict], key: str, edges: tuple[tuple[float, float], ...], s
     return rows
 
 
+def spread(boxes: list[dict], key: str, scale: float, unit: str) -> str:
+    """``key``'s median and 90th percentile over ``boxes``, scaled to ``unit``."""
+    values = sorted(b[key] * scale for b in boxes)
+    def at(q: float) -> float:
+        return values[min(len(values) - 1, round(q * (len(values) - 1)))]
+    return f"{key} median {at(0.5):.1f} {unit}, 90th percentile {at(0.9):.1f} {unit}"
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("evals", nargs="+", type=Path, help="colorsort-eval --json files")
@@ -46,6 +58,16 @@ def main() -> None:
     print("| band | boxes | in a wrong bin | dropped |")
     print("| --- | --- | --- | --- |")
     print("\n".join(bands(boxes, "turned", YAW_BANDS, 1, "deg") + bands(boxes, "offset", OFFSET_BANDS, 100, "cm")))
+    picked = [b for b in boxes if b.get("grip_offset") is not None]
+    if picked:
+        for b in picked:
+            b["gripped off axis"], b["gripped turned"] = b["grip_offset"], abs(b["grip_yaw"])
+        held = f"{spread(picked, 'gripped off axis', 1000, 'mm')}; {spread(picked, 'gripped turned', 1, 'deg')}"
+        print(f"\nhow the cup held the {len(picked)} boxes it picked: {held}")
+        print("| band | boxes | in a wrong bin | dropped |")
+        print("| --- | --- | --- | --- |")
+        print("\n".join(bands(picked, "gripped off axis", GRIP_OFFSET_BANDS, 1000, "mm")
+                        + bands(picked, "gripped turned", GRIP_YAW_BANDS, 1, "deg")))
 
 
 if __name__ == "__main__":

@@ -78,6 +78,9 @@ def test_each_box_of_an_episode_says_where_it_was_set_down():
     assert all(abs(b["offset"]) <= config.lateral_jitter and abs(b["yaw"]) <= config.yaw_jitter for b in boxes)
     assert len({(b["offset"], b["yaw"]) for b in boxes}) == len(boxes) and any(abs(b["yaw"]) > 1.0 for b in boxes)
     assert all(b["offset"] == 0.0 and b["yaw"] == 0.0 for b in plain.per_episode[0]["boxes"])
+    # the expert located each box, turned or not: held within 1 cm of the cup's axis, turned 10 deg at most
+    held = boxes + plain.per_episode[0]["boxes"]
+    assert all(b["grip_offset"] < 0.01 and abs(b["grip_yaw"]) < 10.0 for b in held)
 
 
 def test_distractors_are_let_through_and_counted():
@@ -158,3 +161,25 @@ def test_outcomes_by_pose_counts_each_band(tmp_path):
                         "| turned 30 to 45 deg | 1 | 1 (100%) | 0 |"]
     assert rows[3:] == ["| offset -5 to -2.5 cm | 1 | 0 (0%) | 0 |", "| offset -2.5 to 0 cm | 0 | 0 (-) | 0 |",
                         "| offset 0 to 2.5 cm | 2 | 1 (50%) | 1 |", "| offset 2.5 to 5 cm | 1 | 1 (100%) | 0 |"]
+
+
+def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
+    """With grips recorded, boxes never picked are left out of the grip bands; |grip yaw| either way."""
+    boxes = [{"outcome": "placed", "offset": 0.0, "yaw": 0.0, "grip_offset": 0.002, "grip_yaw": 1.0},
+             {"outcome": "misplaced", "offset": 0.04, "yaw": 30.0, "grip_offset": 0.026, "grip_yaw": -22.0},
+             {"outcome": "misplaced", "offset": 0.01, "yaw": 10.0, "grip_offset": 0.012, "grip_yaw": 8.0},
+             {"outcome": "dropped", "offset": 0.0, "yaw": 0.0, "grip_offset": None, "grip_yaw": None}]
+    (tmp_path / "eval.json").write_text(json.dumps({"per_episode": [{"boxes": boxes}]}))
+    out = subprocess.run([sys.executable, str(REPO / "demos" / "outcomes_by_pose.py"), "eval.json"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert ("how the cup held the 3 boxes it picked: gripped off axis median 12.0 mm, 90th percentile 26.0 mm; "
+            "gripped turned median 8.0 deg, 90th percentile 22.0 deg") in lines
+    assert lines[-7:] == ["| gripped off axis 0 to 5 mm | 1 | 0 (0%) | 0 |",
+                          "| gripped off axis 5 to 10 mm | 0 | 0 (-) | 0 |",
+                          "| gripped off axis 10 to 20 mm | 1 | 1 (100%) | 0 |",
+                          "| gripped off axis 20 to 60 mm | 1 | 1 (100%) | 0 |",
+                          "| gripped turned 0 to 5 deg | 1 | 0 (0%) | 0 |",
+                          "| gripped turned 5 to 15 deg | 1 | 1 (100%) | 0 |",
+                          "| gripped turned 15 to 45 deg | 1 | 1 (100%) | 0 |"]

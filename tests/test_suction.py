@@ -75,3 +75,25 @@ def test_released_box_falls_within_one_control_step(gripped):
     for _ in range(20):
         env.step(np.concatenate([q_above, [-1.0, -1.0]]))
     assert env.box_pos(box)[2] == pytest.approx(env.layout.belt_top_z + 0.05, abs=0.005)  # back on the belt
+
+
+def test_each_seal_records_how_far_off_the_cup_axis_and_how_turned_the_box_is_held(env):
+    """The cup pressed onto a box 12 mm off its centre: the grip names that box, says 12 mm, and gives the
+    box's turn against the cup that the two bodies' orientations show."""
+    box = wait_for_box_at_sensor(env)
+    top = env.box_pos(box) + [0.012, 0, env.layout.box_size / 2]
+    q_above = solve_cup_ik(env, top + [0, 0, 0.10])
+    q_at = solve_cup_ik(env, top + [0, 0, -0.003], q_above)
+    move_to(env, q_above, -1.0, 1.0)
+    move_to(env, q_at, -1.0, 0.5)
+    move_to(env, q_at, 1.0, 0.1, settle=0.2)
+    assert env.plant.seal.held == box.index
+    (grip,) = env.grips
+    assert grip.serial == box.serial and abs(grip.offset - 0.012) < 0.002
+    seal, d = env.plant.seal, env.sim.data
+    turn = d.body_xmat[seal.cup].reshape(3, 3).T @ d.body_xmat[seal.box_bodies[box.index]].reshape(3, 3)
+    yaw = (np.degrees(np.arctan2(turn[1, 0], turn[0, 0])) + 45) % 90 - 45
+    assert -45 <= grip.yaw < 45 and abs(grip.yaw - yaw) < 0.5
+    move_to(env, q_above, -1.0, 0.3)
+    env.reset()
+    assert env.grips == []

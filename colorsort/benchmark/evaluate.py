@@ -17,6 +17,7 @@ from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
+from colorsort.cell.plant import Grip
 from colorsort.executors.base import (
     DEFAULT_SHARD_SIZE,
     ExecutorConfig,
@@ -98,8 +99,10 @@ class _Runner:
             raise
         ended = "success" if info["is_success"] else "failed" if info["failed"] else "time limit"
         placed = {p.serial: p for p in self.env.env.placements}
+        gripped = {g.serial: g for g in self.env.env.grips}  # a box sealed twice: the last seal
         boxes = [{"time": e.time, "color": e.color, "outcome": e.outcome.value, "bin": e.bin,
-                  "offset": round(placed[e.serial].offset, 4), "yaw": round(placed[e.serial].yaw, 2)}
+                  "offset": round(placed[e.serial].offset, 4), "yaw": round(placed[e.serial].yaw, 2),
+                  **grip_fields(gripped.get(e.serial))}
                  for e in self.env.env.events[: self.env.variant.boxes]]
         result = {"seed": seed, "success": bool(info["is_success"]), "ended": ended, "steps": self.env.steps,
                   **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through", "distractors", "sim_time",
@@ -107,6 +110,14 @@ class _Runner:
         if film is not None:
             result["video"] = film.finish()
         return result
+
+
+def grip_fields(grip: Grip | None) -> dict:
+    """A box's record of how the cup held it: ``grip_offset`` [m] off the cup's axis and ``grip_yaw`` [deg]
+    against the cup (None for a box never sealed)."""
+    if grip is None:
+        return {"grip_offset": None, "grip_yaw": None}
+    return {"grip_offset": round(grip.offset, 4), "grip_yaw": round(grip.yaw, 2)}
 
 
 PRELOAD = ("colorsort.benchmark.evaluate",)  # what worker processes import once, before they fork

@@ -27,7 +27,7 @@ from colorsort.cell import cameras
 from colorsort.cell.boxes import Box
 from colorsort.cell.conveyor import Placement
 from colorsort.cell.models.arena import ConveyorArena
-from colorsort.cell.plant import Plant
+from colorsort.cell.plant import Grip, Plant
 from colorsort.cell.referee import BoxEvent, Tally
 from colorsort.cell.rendering import check_gl
 from colorsort.cell.sim_state import CellState, SimStateLayout, rng_from_words, rng_to_words
@@ -207,6 +207,12 @@ class ColorSort(ManipulationEnv):
         """Every box set down on the belt this episode, in order: serial, colour, offset, yaw
         (``conveyor.Placement``)."""
         return self.plant.spawner.placed
+
+    @property
+    def grips(self) -> list[Grip]:
+        """Every seal of this episode, in order: which box, how far off the cup's axis, how turned
+        (``plant.Grip``)."""
+        return self.plant.grips
 
     @property
     def tally(self) -> Tally:

@@ -27,6 +27,15 @@ MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_C
                  | mujoco.mjtState.mjSTATE_WARMSTART)
 
 
+@dataclass(frozen=True)
+class Grip:
+    """How the cup held a box when it sealed on it (``VacuumSeal.grip``)."""
+
+    serial: int
+    offset: float  # [m] the box centre's distance from the cup axis
+    yaw: float  # [deg] the box's turn against the cup, in [-45, 45)
+
+
 @dataclass
 class PlantState:
     """The plant's part of an instant (``sim_state.py`` lays it out as a vector)."""
@@ -64,11 +73,13 @@ class Plant:
                                box_geoms=[f"{n}_geom" for n in names], welds=[f"suction_{n}" for n in names])
         self.lights = LightRig(model)
         self.lighting = Lighting()
+        self.grips: list[Grip] = []  # every seal of this episode, in order
 
     def reset(self, now: float, rng: np.random.Generator) -> None:
         """Every box back in the pool, the belt at rest and running, counters cleared, the first box spawned."""
         self.referee.reset()
         self.spawner.reset()
+        self.grips = []
         for box in self.pool.boxes:
             self.remove_box(box)
         self.belt.reset()
@@ -96,7 +107,10 @@ class Plant:
     def physics_step(self) -> None:
         """Before each MuJoCo step, after the controller wrote ``ctrl``: drive the belt, seal or release."""
         self.belt.drive()
+        was = self.seal.held
         self.seal.update()
+        if self.seal.held is not None and self.seal.held != was:
+            self.grips.append(Grip(self.pool.boxes[self.seal.held].serial, *self.seal.grip()))
 
     def control_step(self, now: float, rng: np.random.Generator) -> float:
         """At the end of a control period (sim time ``now`` [s]): judge the boxes, spawn. Returns the

@@ -61,6 +61,19 @@ class VacuumSeal:
             self.data.eq_active[self.welds[self.held]] = 0
             self.held = None
 
+    def grip(self) -> tuple[float, float]:
+        """Where the cup holds the sealed box, from its weld: the box centre's distance from the cup axis [m]
+        and the box's turn against the cup about that axis [deg], in [-45, 45) (a cube's side faces repeat
+        every 90 deg). The expert holds boxes within a few mm and degrees; a learned policy that has not
+        located a box holds it off the pad's centre, its colour hidden from the wrist camera."""
+        if self.held is None:
+            raise ValueError("no box is sealed to the cup")
+        weld = self.model.eq_data[self.welds[self.held]]
+        turn = np.zeros(9)
+        mujoco.mju_quat2Mat(turn, weld[6:10])
+        yaw = float(np.degrees(np.arctan2(turn[3], turn[0])))  # rows of the 3x3: R[1, 0], R[0, 0]
+        return float(np.hypot(weld[3], weld[4])), (yaw + 45.0) % 90.0 - 45.0
+
     def get_state(self) -> tuple[int, np.ndarray]:
         """(the sealed box's pool index or -1, the weld's ``eq_data`` (mjNEQDATA,), zeros when none)."""
         held = self.held if self.held is not None else -1
