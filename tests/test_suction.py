@@ -94,6 +94,5 @@ def test_each_seal_records_how_far_off_the_cup_axis_and_how_turned_the_box_is_he
     turn = d.body_xmat[seal.cup].reshape(3, 3).T @ d.body_xmat[seal.box_bodies[box.index]].reshape(3, 3)
     yaw = (np.degrees(np.arctan2(turn[1, 0], turn[0, 0])) + 45) % 90 - 45
     assert -45 <= grip.yaw < 45 and abs(grip.yaw - yaw) < 0.5
-    move_to(env, q_above, -1.0, 0.3)
     env.reset()
     assert env.grips == []

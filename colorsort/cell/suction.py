@@ -64,8 +64,7 @@ class VacuumSeal:
     def grip(self) -> tuple[float, float]:
         """Where the cup holds the sealed box, from its weld: the box centre's distance from the cup axis [m]
         and the box's turn against the cup about that axis [deg], in [-45, 45) (a cube's side faces repeat
-        every 90 deg). The expert holds boxes within a few mm and degrees; a learned policy that has not
-        located a box holds it off the pad's centre, its colour hidden from the wrist camera."""
+        every 90 deg)."""
         if self.held is None:
             raise ValueError("no box is sealed to the cup")
         weld = self.model.eq_data[self.welds[self.held]]
