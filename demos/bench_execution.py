@@ -2,14 +2,15 @@
 
     python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking \
         [--executions chunk10,ens0.01] [--episodes 20] [--envs 2]
+    python demos/bench_execution.py --policy baselines/act-camera --variant jitter,seed
 
 ACT predicts a chunk of actions per inference. ``chunkN`` executes the first N of each chunk
 open-loop (LeRobot's default is 10 of 20); ``ensC`` predicts every step and executes the average of
 every chunk's prediction for that step, weights exp(-C * age) (ACT's temporal ensembling). Neither
 setting changes the trained weights, so each execution is the same checkpoint with its
 ``config.json`` rewritten in a temporary copy, scored by ``colorsort.benchmark.evaluate`` on the
-variant's first ``--episodes`` evaluation seeds. Prints one row per execution: success with its
-95% Wilson interval and the box outcomes.
+variant's first ``--episodes`` evaluation seeds. ``--variant`` takes several, comma-separated. Prints
+one row per variant and execution: success with its 95% Wilson interval and the box outcomes.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
 from colorsort.benchmark.evaluate import evaluate, observation_settings  # noqa: E402
 from colorsort.logs import quiet_robosuite_info  # noqa: E402
-from colorsort.results import recorded
+from colorsort.results import recorded  # noqa: E402
+from colorsort.variants import get_variant  # noqa: E402
 
 
 def inference_settings(execution: str) -> dict[str, float | int | None]:
@@ -50,7 +52,7 @@ def with_execution(policy: Path, execution: str, folder: Path) -> Path:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--policy", required=True, help="a LeRobot ACT checkpoint folder")
-    p.add_argument("--variant", default="tracking")
+    p.add_argument("--variant", default="tracking", help="a variant, or several comma-separated")
     p.add_argument("--executions", default="chunk10,ens0.01", help="comma-separated chunkN or ensC")
     p.add_argument("--episodes", type=int, default=20)
     p.add_argument("--envs", type=int, default=2)
@@ -59,18 +61,23 @@ def main() -> None:
     executions = args.executions.split(",")
     for execution in executions:
         inference_settings(execution)  # ValueError before any episode runs
+    variants = args.variant.split(",")
+    for variant in variants:
+        get_variant(variant)  # ValueError naming the valid variants before any episode runs
     cameras, size = observation_settings(args.policy, None, None)
-    print(f"{args.policy} on '{args.variant}', first {args.episodes} evaluation seeds")
-    print("| execution | success rate (95% CI) | correct | misplaced | dropped | distractors let through |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    print(f"{args.policy} on {', '.join(repr(v) for v in variants)}, first {args.episodes} evaluation seeds of each")
+    print("| variant | execution | success rate (95% CI) | correct | misplaced | dropped | distractors let through |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as tmp:
-        for execution in executions:
-            policy = with_execution(Path(args.policy), execution, Path(tmp))
-            r = evaluate(str(policy), args.variant, args.episodes, image_size=size, cameras=cameras,
-                         progress=False, envs=args.envs)
-            lo, hi = r.success_ci95
-            print(f"| {execution} | {100 * r.success_rate:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%) | {r.correct} "
-                  f"| {r.misplaced} | {r.dropped} | {r.distractors_let_through}/{r.distractors} |", flush=True)
+        policies = {e: with_execution(Path(args.policy), e, Path(tmp)) for e in executions}
+        for variant in variants:
+            for execution, policy in policies.items():
+                r = evaluate(str(policy), variant, args.episodes, image_size=size, cameras=cameras,
+                             progress=False, envs=args.envs)
+                lo, hi = r.success_ci95
+                print(f"| {variant} | {execution} | {100 * r.success_rate:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%) "
+                      f"| {r.correct} | {r.misplaced} | {r.dropped} | {r.distractors_let_through}/{r.distractors} |",
+                      flush=True)
 
 
 if __name__ == "__main__":
