@@ -412,18 +412,21 @@ def test_bench_execution_scores_one_checkpoint_under_each_execution(tmp_path):
 
 @pytest.mark.slow
 def test_bench_execution_scores_each_variant_named_and_refuses_an_unknown_one_first(tmp_path):
-    """``--variant default,fast`` gives one row per variant and execution, each scored on that variant; a list
-    with an unknown name stops with the valid names before any episode runs."""
+    """``--variant default,distractors`` gives one row per variant and execution, each scored on that variant (only
+    the distractors episode holds boxes with no bin); a list with an unknown name stops with the valid names
+    before any episode runs."""
     script = [sys.executable, str(REPO / "demos" / "bench_execution.py"), "--policy", str(SHIPPED["act-state"]),
               "--executions", "chunk10", "--episodes", "1", "--envs", "1"]
     bad = run(script + ["--variant", "default,nope"], tmp_path, timeout=120)
     assert bad.returncode != 0 and "Valid variants" in bad.stderr and "| default |" not in bad.stdout
-    good = run(script + ["--variant", "default,fast"], tmp_path, timeout=300)
+    good = run(script + ["--variant", "default,distractors"], tmp_path, timeout=300)
     assert good.returncode == 0, good.stderr[-3000:]
-    rows = [line.split(" | ") for line in good.stdout.splitlines() if line.startswith("| default") or
-            line.startswith("| fast")]
-    assert [(r[0].strip("| "), r[1]) for r in rows] == [("default", "chunk10"), ("fast", "chunk10")]
-    assert all(int(r[3]) + int(r[4]) + int(r[5]) >= 1 for r in rows)  # each scored a box of its own episode
+    rows = [line.strip("| ").split(" | ") for line in good.stdout.splitlines()
+            if line.startswith("| default |") or line.startswith("| distractors |")]
+    assert [(r[0], r[1]) for r in rows] == [("default", "chunk10"), ("distractors", "chunk10")]
+    assert all(int(r[3]) + int(r[4]) + int(r[5]) >= 1 for r in rows)  # each moved a box of its own episode
+    default_distractors, distractors_distractors = (int(r[6].split("/")[1]) for r in rows)
+    assert default_distractors == 0 and distractors_distractors >= 1
 
 
 def test_the_shipped_state_policy_lets_a_distractor_through_where_the_expert_did(tmp_path):
