@@ -110,6 +110,57 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
 
 
+@pytest.mark.slow
+def test_the_diffusion_camera_recipe_runs_in_small(tmp_path):
+    """camera-diffusion, tiny: lerobot-train's diffusion policy with its GroupNorm ResNet, spatial-softmax keypoints
+    and crops; it reads the images and the arm's state only, and colorsort-eval runs it on the cameras it knows."""
+    out = tmp_path / "diffusion"
+    result = run(baseline("--recipe", "camera-diffusion", "--demos", "1", "--train-variants", "default",
+                          "--steps", "2", "--batch-size", "2", "--eval-variants", "default", "--eval-episodes", "1",
+                          "--curve-episodes", "1", "--episode-length", "10", "--workers", "1", "--envs", "1",
+                          "--out", str(out)), tmp_path, timeout=900)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    assert "--policy.type=diffusion" in result.stdout and "| default | diffusion, sensor+wrist | 1 | 2 steps" in \
+        result.stdout
+    model = out / "train" / "demos-1-late100-2steps-diffusion-seed1000" / "checkpoints" / "last" / "pretrained_model"
+    config = json.loads((model / "config.json").read_text())
+    assert config["type"] == "diffusion" and set(config["input_features"]) == {
+        "observation.state", "observation.images.sensor", "observation.images.wrist"}
+    assert config["input_features"]["observation.images.sensor"]["shape"] == [3, 64, 64]
+    assert (config["use_group_norm"], config["crop_shape"], config["pretrained_backbone_weights"]) == (
+        True, [58, 58], None)
+    report = json.loads((out / "eval" / "demos-1-late100-2steps-diffusion-seed1000-chunk8-default.json").read_text())
+    assert report["episodes"] == 1 and report["policy"] == str(model)
+    assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "sensor"]) == 2
+
+
+def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encoder(tmp_path):
+    """Its command line: LeRobot's diffusion type, GroupNorm, no pretrained weights (a download), one shared
+    encoder, a crop of 0.9 of the recipe's image side; its settings refuse what LeRobot would reject later."""
+    from colorsort.cli.baseline import main
+    from colorsort.training.policy_settings import DiffusionSettings
+    from colorsort.training.stages import train_command
+
+    recipe = get_recipe("camera-diffusion")
+    cmd = train_command(recipe, tmp_path / "demos-48", 5000, 1000, tmp_path / "run")
+    for arg in ("--policy.type=diffusion", "--policy.use_group_norm=true", "--policy.pretrained_backbone_weights=null",
+                "--policy.use_separate_rgb_encoder_per_camera=false", "--policy.crop_shape=[58,58]",
+                "--policy.down_dims=[32,64]", "--policy.n_obs_steps=1", "--policy.num_inference_steps=10"):
+        assert arg in cmd
+    assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", image_size=32), tmp_path,
+                                                          1, 1, tmp_path)
+    assert recipe.run_suffix == "-diffusion" and recipe.policy.execution == "chunk8" and recipe.label.startswith(
+        "diffusion, ")
+    assert not any(a.startswith("--policy.type=act") or "dim_model" in a for a in cmd)
+    with pytest.raises(ValueError, match="multiple of"):
+        DiffusionSettings(horizon=10)
+    with pytest.raises(ValueError, match="n_action_steps"):
+        DiffusionSettings(n_action_steps=17)
+    with pytest.raises(ValueError, match="crop_fraction"):
+        DiffusionSettings(crop_fraction=0.2)
+    assert main(["--recipe", "camera-diffusion", "--lr-schedule", "cosine", "--out", str(tmp_path)]) == 2
+
+
 def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
     """``image_shift``: LeRobot's own image transforms, one random shift per image, and a run folder of its own."""
     import draccus
@@ -230,14 +281,14 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
     """On the moving belt ACT averages its chunks; the stopping belt's recipes execute 10 actions open-loop.
     Training never reads n_action_steps or temporal_ensemble_coeff, so a reused run (trained with other values)
     gets the recipe's in every checkpoint's config, and its evaluations are filed under the new execution."""
-    from colorsort.training.recipes import ActSettings
+    from colorsort.training.policy_settings import ActSettings
     from colorsort.training.stages import set_inference
 
-    act = get_recipe("camera-tracking").act
-    assert (act.n_action_steps, act.temporal_ensemble_coeff, act.execution) == (1, 0.01, "ens0.01")
-    assert "--policy.temporal_ensemble_coeff=0.01" in act.args() and "--policy.n_action_steps=1" in act.args()
-    assert get_recipe("state").act.execution == get_recipe("camera").act.execution == "chunk10"
-    assert get_recipe("state-tracking").act == act
+    act = get_recipe("camera-tracking").policy
+    assert (act.type, act.n_action_steps, act.temporal_ensemble_coeff, act.execution) == ("act", 1, 0.01, "ens0.01")
+    assert "--policy.temporal_ensemble_coeff=0.01" in act.args(64) and "--policy.n_action_steps=1" in act.args(64)
+    assert get_recipe("state").policy.execution == get_recipe("camera").policy.execution == "chunk10"
+    assert get_recipe("state-tracking").policy == act
     with pytest.raises(ValueError, match="n_action_steps=1"):
         ActSettings(n_action_steps=10, temporal_ensemble_coeff=0.01)
     with pytest.raises(ValueError, match="chunk_size"):

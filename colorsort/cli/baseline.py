@@ -10,7 +10,7 @@ Example::
 Every stage is a documented command, run as a subprocess with its command line printed:
 ``colorsort-collect`` for each training variant (merged with LeRobot's ``aggregate_datasets``; a
 camera recipe's set then loses ``observation.environment_state`` with ``remove_feature``),
-``lerobot-train --policy.type=act``, and ``colorsort-eval`` on the variants' fixed evaluation seeds,
+``lerobot-train`` (ACT or diffusion), and ``colorsort-eval`` on the variants' fixed evaluation seeds,
 with the learning curve from the checkpoints saved along the way. It prints a Markdown table and
 writes ``OUT/results.json``, ``OUT/success_vs_demos.png`` and ``OUT/learning_curve.png``.
 ``--ship DIR`` copies the largest set's ``pretrained_model`` to DIR with ``scores.json``, the plots
@@ -32,7 +32,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from colorsort.training.pipeline import UNTIL, RunSettings, run_pipeline
-from colorsort.training.recipes import LR_SCHEDULES, RECIPES, get_recipe
+from colorsort.training.policy_settings import LR_SCHEDULES, ActSettings
+from colorsort.training.recipes import RECIPES, get_recipe
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -90,7 +91,11 @@ def overrides(args: argparse.Namespace) -> dict:
     if args.no_turn:
         found["turn_to_box"] = False
     if args.lr_schedule:
-        found["act"] = replace(get_recipe(args.recipe).act, lr_schedule=args.lr_schedule)
+        policy = get_recipe(args.recipe).policy
+        if not isinstance(policy, ActSettings):
+            raise ValueError(f"--lr-schedule sets ACT's schedule; recipe {args.recipe!r} trains {policy.name}, "
+                             "which keeps LeRobot's (cosine)")
+        found["policy"] = replace(policy, lr_schedule=args.lr_schedule)
     for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",
                 "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size", "image_shift",
                 "device"):

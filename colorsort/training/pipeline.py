@@ -69,7 +69,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             last = run_dir / "checkpoints" / "last" / "pretrained_model"
             scored = []
             for variant in recipe.eval_variants if largest else (recipe.main_variant,):
-                name = f"{run_dir.name}-{recipe.act.execution}-{variant}"
+                name = f"{run_dir.name}-{recipe.policy.execution}-{variant}"
                 report_path, log = out / "eval" / f"{name}.json", out / "logs" / f"eval-{name}.log"
                 episodes = recipe.episodes_on(variant)
                 report = stages.evaluate(recipe, last, variant, episodes, report_path, settings.envs, log)
@@ -112,7 +112,7 @@ def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing:
         if step == steps:
             report = final
         else:
-            name = f"{run_dir.name}-{recipe.act.execution}-{step}"
+            name = f"{run_dir.name}-{recipe.policy.execution}-{step}"
             report = stages.evaluate(recipe, model, recipe.main_variant, episodes,
                                      settings.out / "curve" / f"{name}.json", settings.envs,
                                      settings.out / "logs" / f"curve-{name}.log")

@@ -1,8 +1,9 @@
-"""Named recipes for the learned baselines: the demos, the LeRobot ACT policy and its training, the evaluation.
+"""Named recipes for the learned baselines: the demos, the LeRobot policy and its training, the evaluation.
 
 A recipe is everything ``colorsort-baseline`` needs to rebuild a baseline: which variants the
 expert's demos come from (and in what proportion), which inputs the policy reads (the cameras
-or the simulator's box state), the ACT size and training length, and which variants score it.
+or the simulator's box state), the policy (ACT or diffusion, ``policy_settings``), its training
+length, and which variants score it.
 
 - ``state``: the simulator's box state (``observation.environment_state``) and the arm's; no
   cameras; demos with late belt passes (``late_pass``), three training seeds. The policy in
@@ -12,91 +13,21 @@ or the simulator's box state), the ACT size and training length, and which varia
   (joints, cup, suction, ray, belt): what a real cell has. ResNet-18 from scratch, every training
   image shifted at random by up to 0.1 of its size, on 2 CPU cores.
 - ``camera-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
+- ``camera-diffusion``: the ``camera`` demos at 64 px, learned by LeRobot's diffusion policy, whose
+  image encoder (GroupNorm, spatial-softmax keypoints, random crops) is built to locate things.
 - ``camera-large``: LeRobot's ACT size on 128 px images, for a GPU (``--device cuda``).
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
+
+from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SMALL_DIFFUSION, TRACKING_ACT, PolicySettings
 
 IRB140_VARIANTS = ("seed", "default", "fast", "jitter", "lighting", "distractors")
 TRACKING_VARIANTS = ("tracking", "tracking-jitter", "tracking-fast")
 DEVICES = ("cpu", "cuda", "mps")
-LR_SCHEDULES = ("constant", "cosine")
-
-
-@dataclass(frozen=True)
-class ActSettings:
-    """LeRobot ACT settings, passed to ``lerobot-train`` as ``--policy.<name>=<value>``."""
-
-    dim_model: int = 128
-    dim_feedforward: int = 512
-    n_heads: int = 4
-    n_encoder_layers: int = 2
-    n_decoder_layers: int = 1
-    chunk_size: int = 20  # actions predicted per inference [steps of 50 ms]
-    n_action_steps: int = 10  # actions executed open-loop per inference (1 with temporal ensembling)
-    temporal_ensemble_coeff: float | None = None  # set: ACT's temporal ensembling (see TRACKING_ACT)
-    use_vae: bool = False  # the expert is deterministic: one mode per state, nothing for a latent to explain
-    optimizer_lr: float = 1e-4  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
-    optimizer_lr_backbone: float = 1e-4
-    pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
-    lr_schedule: str = "constant"  # LeRobot's ACT preset; "cosine": warm up, then anneal to 0 at the last update
-    warmup_steps: int = 200  # updates of linear warm-up before the cosine [updates]
-
-    def __post_init__(self) -> None:
-        if self.lr_schedule not in LR_SCHEDULES:
-            raise ValueError(f"lr_schedule={self.lr_schedule!r}: valid schedules are {list(LR_SCHEDULES)}")
-        if self.warmup_steps < 0:
-            raise ValueError(f"warmup_steps={self.warmup_steps}: give 0 or more")
-        if not 1 <= self.n_action_steps <= self.chunk_size:
-            raise ValueError(f"n_action_steps={self.n_action_steps}: give 1 to chunk_size ({self.chunk_size})")
-        if self.temporal_ensemble_coeff is not None and self.n_action_steps != 1:
-            raise ValueError(f"temporal_ensemble_coeff={self.temporal_ensemble_coeff} needs n_action_steps=1 "
-                             f"(got {self.n_action_steps}); or set temporal_ensemble_coeff=None")
-
-    @property
-    def execution(self) -> str:
-        """How the chunks are executed, for file names: ``ens0.01`` or ``chunk10``."""
-        if self.temporal_ensemble_coeff is not None:
-            return f"ens{self.temporal_ensemble_coeff:g}"
-        return f"chunk{self.n_action_steps}"
-
-    def inference(self) -> dict[str, float | int | None]:
-        """The settings that change how a trained ACT acts but not what it learns."""
-        return {"n_action_steps": self.n_action_steps, "temporal_ensemble_coeff": self.temporal_ensemble_coeff}
-
-    @property
-    def run_suffix(self) -> str:
-        """What sets a run trained under this schedule apart in folder names: ``-cos`` or nothing."""
-        return "" if self.lr_schedule == "constant" else "-cos"
-
-    def args(self) -> list[str]:
-        """``lerobot-train``'s arguments for the policy, its optimizer and its learning-rate schedule."""
-        text = {True: "true", False: "false", None: "null"}
-        policy = {k: v for k, v in asdict(self).items() if k not in ("lr_schedule", "warmup_steps")}
-        args = [f"--policy.{k}={text.get(v, v) if isinstance(v, (bool, type(None))) else v}"
-                for k, v in policy.items()]
-        if self.lr_schedule == "cosine":
-            if self.optimizer_lr_backbone != self.optimizer_lr:
-                raise ValueError("lr_schedule='cosine' trains every parameter at optimizer_lr: "
-                                 f"give optimizer_lr_backbone={self.optimizer_lr} too")
-            # LeRobot's ACT preset has no schedule, so the optimizer is spelt out (ACT's own AdamW settings)
-            args += ["--use_policy_training_preset=false", "--optimizer.type=adamw",
-                     f"--optimizer.lr={self.optimizer_lr}", "--optimizer.weight_decay=0.0001",
-                     "--optimizer.grad_clip_norm=10", "--scheduler.type=cosine_annealing_with_warmup",
-                     f"--scheduler.num_warmup_steps={self.warmup_steps}"]
-        return args
-
-
-SMALL_ACT = ActSettings()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
-# On the moving belt every step's action is the average of every chunk's prediction for it (ACT's
-# temporal ensembling, weights exp(-0.01 * age)): executing 10 of each chunk open-loop, the camera
-# policy sealed on no box (0 of 50 on tracking); ensembled, 33 of 50 episodes sorted every box. On the
-# stopping belt it made the state policy stall on fast (demos/bench_execution.py: 30% against 70%).
-TRACKING_ACT = replace(SMALL_ACT, n_action_steps=1, temporal_ensemble_coeff=0.01)
-LARGE_ACT = ActSettings(dim_model=512, dim_feedforward=3200, n_heads=8, n_encoder_layers=4)  # LeRobot's own size
 
 
 @dataclass(frozen=True)
@@ -105,7 +36,7 @@ class Recipe:
 
     Attributes:
         name: the preset's name (``RECIPES``).
-        act: the ACT policy's settings.
+        policy: the LeRobot policy and its settings (``policy_settings``: ACT or diffusion).
         cameras: camera inputs; () for a policy that reads the simulator's box state instead.
         image_size: square camera images [px].
         image_shift: random shifts of every training image, LeRobot's image transforms (``RandomAffine``,
@@ -138,7 +69,7 @@ class Recipe:
     """
 
     name: str
-    act: ActSettings = SMALL_ACT
+    policy: PolicySettings = SMALL_ACT
     cameras: tuple[str, ...] = ()
     image_size: int = 64
     image_shift: float = 0.0
@@ -226,7 +157,7 @@ class Recipe:
 
     @property
     def label(self) -> str:
-        return f"ACT, {'+'.join(self.cameras) if self.cameras else 'state'}"
+        return f"{self.policy.name}, {'+'.join(self.cameras) if self.cameras else 'state'}"
 
     def split(self, n: int) -> dict[str, int]:
         """``n`` demos over ``train_mix`` in proportion to the weights (largest remainders round up)."""
@@ -250,7 +181,7 @@ class Recipe:
     @property
     def run_suffix(self) -> str:
         """What sets this recipe's training runs apart in folder names: the schedule's and ``-shift<F>``."""
-        return self.act.run_suffix + (f"-shift{self.image_shift:g}" if self.image_shift else "")
+        return self.policy.run_suffix + (f"-shift{self.image_shift:g}" if self.image_shift else "")
 
     def augment_args(self) -> list[str]:
         """``lerobot-train``'s arguments for the image transforms: one random shift per image, or none."""
@@ -276,7 +207,7 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
     # 10,000 updates (51 passes): seed 1001 scored 25%, 95%, 100%, 100% on default at 2,500, 5,000, 7,500, 10,000
     Recipe("state", train_mix=(("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)), demos=(40,),
            late_pass=100, steps=10000, save_every=2500, seeds=(1000, 1001, 1002)),
-    Recipe("state-tracking", act=TRACKING_ACT, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,),
+    Recipe("state-tracking", policy=TRACKING_ACT, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(40,),
            boxes_per_episode=5, steps=3000, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
     # the state recipe's distractor data (late passes) with every camera-visible variant; 32 px images
     # run 2.3-2.9 updates/s, so 8,000 updates (17 passes) fit the hour: 64 px at 3,600 (7.8) scored 68% on default;
@@ -285,10 +216,15 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
            train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),
            demos=(48,), late_pass=100, steps=8000, save_every=2000, seeds=(1000, 1001, 1002), image_shift=0.1),
     # 3600 updates: the same run trained on to 4500 (identical up to 3600) fell from 66% to 0% on tracking
-    Recipe("camera-tracking", act=TRACKING_ACT, cameras=("sensor", "wrist"), image_size=64, batch_size=32,
+    Recipe("camera-tracking", policy=TRACKING_ACT, cameras=("sensor", "wrist"), image_size=64, batch_size=32,
            train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(48,), boxes_per_episode=5, steps=3600,
            save_every=1200, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
-    Recipe("camera-large", act=LARGE_ACT, cameras=("sensor", "wrist"), image_size=128, batch_size=32,
+    # the camera recipe's demos at 64 px (32 px leaves a 1x1 feature map: no keypoint to place); one
+    # observation a prediction and a 2-level U-Net: 0.69 s an update here, 47.1 MB shipped
+    Recipe("camera-diffusion", policy=SMALL_DIFFUSION, cameras=("sensor", "wrist"), image_size=64, batch_size=32,
+           train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),
+           demos=(48,), late_pass=100, steps=4500, save_every=1125),
+    Recipe("camera-large", policy=LARGE_ACT, cameras=("sensor", "wrist"), image_size=128, batch_size=32,
            train_mix=(("default", 4), ("lighting", 4), ("jitter", 6), ("distractors", 5), ("fast", 4)),
            demos=(115,), steps=20000, save_every=5000, device="cuda"),
 )}

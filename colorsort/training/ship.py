@@ -55,12 +55,11 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     inputs = (f"`observation.state` and the cameras {', '.join(recipe.cameras)} at {recipe.image_size} px, never "
               "`observation.environment_state`: the policy sees the boxes" if recipe.cameras else
               "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
-    act = recipe.act
     boxes = f"{recipe.boxes_per_episode} boxes each" + "".join(
         f", {variant}'s {n}" for variant, n in recipe.boxes_by_variant)
-    backbone = " ResNet-18 trained from scratch (no pretrained weights)," if recipe.cameras else ""
+    backbone = ", its ResNet-18 trained from scratch (no pretrained weights)" if recipe.cameras else ""
     if recipe.image_shift:
-        backbone += f" every training image shifted at random by up to {recipe.image_shift:g} of its size,"
+        backbone += f", every training image shifted at random by up to {recipe.image_shift:g} of its size"
     curve = ""
     if results.get("curve"):
         curve = (f"\nLearning curve on `{recipe.main_variant}` (each checkpoint on the first {recipe.curve_episodes} "
@@ -71,16 +70,11 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
                  f"({', '.join(map(str, recipe.seeds))}; this policy is seed {recipe.seeds[0]}'s):\n\n"
                  f"{summary_table(every_seed, recipe.label)}\n")
     cameras = ",".join(recipe.cameras) or "none"
-    vae = "a" if act.use_vae else "no"
-    execution = (f"predicted every step and averaged over the chunks (temporal ensembling, coefficient "
-                 f"{act.temporal_ensemble_coeff})" if act.temporal_ensemble_coeff is not None
-                 else f"of which {act.n_action_steps} are executed")
     task = get_variant(recipe.main_variant).gym_id.removeprefix("colorsort/")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
 
-LeRobot ACT ({parameters(dest) / 1e6:.2f} M parameters,{backbone} {act.dim_model}-dim, {act.n_encoder_layers} encoder
-and {act.n_decoder_layers} decoder layers, chunks of {act.chunk_size} actions {execution}, {vae} VAE,
-learning rate {act.optimizer_lr}) on {inputs}. {size_mb:.1f} MB.
+{recipe.policy.describe(parameters(dest))}{backbone}, on {inputs}.
+{size_mb:.1f} MB.
 
 Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results['started']}, on
 {machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {boxes}),

@@ -99,12 +99,12 @@ def size(data: Path) -> tuple[int, int]:
 
 
 def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Path) -> list[str]:
-    """``lerobot-train`` of the recipe's ACT on ``data`` for ``steps`` updates with ``seed`` into ``run_dir``."""
+    """``lerobot-train`` of the recipe's policy on ``data`` for ``steps`` updates with ``seed`` into ``run_dir``."""
     save_every = recipe.save_every if 0 < recipe.save_every < steps else steps
     return [str(BIN / "lerobot-train"), f"--dataset.repo_id={REPO_ID}", f"--dataset.root={data}",
-            "--policy.type=act", f"--policy.device={recipe.device}", "--policy.push_to_hub=false",
-            *recipe.act.args(), *recipe.augment_args(), f"--batch_size={recipe.batch_size}", f"--steps={steps}",
-            f"--save_freq={save_every}", "--log_freq=200", "--num_workers=1", f"--seed={seed}",
+            f"--policy.type={recipe.policy.type}", f"--policy.device={recipe.device}", "--policy.push_to_hub=false",
+            *recipe.policy.args(recipe.image_size), *recipe.augment_args(), f"--batch_size={recipe.batch_size}",
+            f"--steps={steps}", f"--save_freq={save_every}", "--log_freq=200", "--num_workers=1", f"--seed={seed}",
             "--wandb.enable=false", f"--output_dir={run_dir}"]
 
 
@@ -127,12 +127,12 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
 
 
 def set_inference(run_dir: Path, recipe: Recipe) -> None:
-    """Give every checkpoint of a reused run the recipe's inference settings (``ActSettings.inference``).
+    """Give every checkpoint of a reused run the recipe's inference settings (``inference()`` of its policy settings).
 
-    They decide how the policy executes its chunks, not its weights (``lerobot-train`` reads neither),
+    They decide how the policy acts, not its weights (``lerobot-train`` reads neither),
     so a run trained under other inference settings is the run the recipe would train.
     """
-    wanted = recipe.act.inference()
+    wanted = recipe.policy.inference()
     for model in sorted(run_dir.glob("checkpoints/*/pretrained_model")):
         if model.parent.is_symlink():
             continue

@@ -31,9 +31,13 @@ BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)
 
 
 def label(scores: dict) -> str:
-    """The policy's label in a table ("ACT, sensor+wrist"), from the recipe stored with its scores."""
-    cameras = scores["recipe"]["cameras"]
-    return f"ACT, {'+'.join(cameras) if cameras else 'state'}"
+    """The policy's label in a table ("ACT, sensor+wrist"), from the recipe stored with its scores.
+
+    Scores written before diffusion recipes existed store ACT's settings as ``act``."""
+    recipe = scores["recipe"]
+    name = {"act": "ACT", "diffusion": "diffusion"}[recipe.get("policy", {"type": "act"})["type"]]
+    cameras = recipe["cameras"]
+    return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
 
 def render(scores: dict, kind: str) -> str:
@@ -78,8 +82,8 @@ def mistakes_table(rows: list[dict]) -> str:
 def headline(folder: Path) -> str:
     """A Markdown table: per baseline in ``folder`` (each subfolder with a ``scores.json``), success per variant;
     with several training seeds, their mean, range and how many."""
-    lines = ["| baseline | inputs | training | success on each variant (one seed: 95% CI, episodes; several: "
-             "mean and range over the seeds) |", "| --- | --- | --- | --- |"]
+    lines = ["| baseline | policy | inputs | training | success on each variant (one seed: 95% CI, episodes; several: "
+             "mean and range over the seeds) |", "| --- | --- | --- | --- | --- |"]
     for path in sorted(folder.glob("*/scores.json")):
         scores = json.loads(path.read_text())
         by_variant = largest_by_variant(scores["rows"])
@@ -92,7 +96,8 @@ def headline(folder: Path) -> str:
         training = (f"{first['demos']} demos, {first['steps']} updates, {span} on the CPU"
                     + (f" per seed, {seeds} seeds" if seeds > 1 else ""))
         name = path.parent.name
-        lines.append(f"| [`{name}`]({folder.name}/{name}/README.md) | {label(scores).removeprefix('ACT, ')} | "
+        policy, _, inputs = label(scores).partition(", ")
+        lines.append(f"| [`{name}`]({folder.name}/{name}/README.md) | {policy} | {inputs} | "
                      f"{training} | {'; '.join(cells)} |")
     return "\n".join(lines)
 
