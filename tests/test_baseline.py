@@ -567,3 +567,42 @@ def test_loading_a_checkpoint_prints_nothing_into_a_benchmarks_recorded_figures(
     capsys.readouterr()
     LeRobotPolicy(SHIPPED["act-state"])
     assert capsys.readouterr().out == ""
+
+
+def test_the_feature_probe_scores_what_features_hold_on_held_out_episodes():
+    """demos/probe_features.py's probe: features that hold the offset linearly give a held-out R^2 near 1, noise
+    gives none of the turn they do not hold, and the colour they hold is read every time."""
+    import importlib.util
+
+    import numpy as np
+
+    spec = importlib.util.spec_from_file_location("probe_features", REPO / "demos" / "probe_features.py")
+    probe_features = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(probe_features)
+    rng = np.random.default_rng(0)
+    episodes = np.repeat(np.arange(12), 15)
+    offset, turn, colour = rng.uniform(-5, 5, 180), rng.uniform(-np.pi, np.pi, 180), rng.integers(0, 3, 180)
+    held = np.column_stack([offset, np.eye(3)[colour]])  # what the features hold, spread over all of them
+    for width in (20, 400):  # more features than frames too (the frames-side solution)
+        features = held @ rng.normal(size=(4, width)) + 0.1 * rng.normal(size=(180, width))
+        features[:, 4] = 7.0  # constant: dropped, not divided by
+        scores = probe_features.probe(features, {"offset_cm": offset, "turn": turn, "colour": colour}, episodes)
+        assert scores["offset_cm"] > 0.95 and scores["turn"] < 0.2 and scores["colour"] == 1.0, (width, scores)
+
+
+@pytest.mark.slow
+def test_the_feature_probe_runs_on_a_shipped_camera_policy(tmp_path):
+    """The probe on act-camera's encoder over two recorded jitter episodes: a row for the pixels, the trained and
+    a random encoder, each with its feature count (32 px: 3,072 pixels, 512 ResNet features)."""
+    data = tmp_path / "jitter"
+    collected = run([str(BIN / "colorsort-collect"), "--variant", "jitter", "--episodes", "4", "--boxes-per-episode",
+                     "2", "--cameras", "sensor,wrist", "--image-size", "32", "--workers", "1", "--out", str(data),
+                     "--repo-id", "local/probe"], tmp_path, timeout=600)
+    assert collected.returncode == 0, collected.stderr[-3000:]
+    out = run([sys.executable, str(REPO / "demos" / "probe_features.py"), "--policy", str(SHIPPED["act-camera"]),
+               "--data", str(data), "--random-init"], tmp_path, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    rows = [line for line in out.stdout.splitlines() if line.startswith("| ") and "---" not in line]
+    assert [r.split(" | ")[:2] for r in rows[1:]] == [["| raw pixels", "3072"], ["| trained encoder", "512"],
+                                                        ["| random encoder", "512"]]
+    assert "4 episodes" in out.stdout and "40 frames" in out.stdout  # 5 frames of each of 8 boxes
