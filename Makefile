@@ -70,6 +70,8 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
 	$(VENV)/bin/python demos/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
 	$(VENV)/bin/python demos/bench_suite.py --episodes 10
+	$(VENV)/bin/python demos/probe_features.py --policy baselines/act-camera --random-init
+	$(VENV)/bin/python demos/probe_features.py --policy baselines/act-camera --camera wrist --random-init
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking --episodes 20
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-state --variant fast --episodes 10
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter --executions chunk20,chunk10,chunk5 --episodes 20

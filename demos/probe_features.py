@@ -1,9 +1,12 @@
 """Does a camera policy's image encoder see where a box is? A linear probe of its features.
 
-    python demos/probe_features.py --policy baselines/act-camera --data DATASET [--camera sensor] [--random-init]
+    python demos/probe_features.py --policy baselines/act-camera [--data DATASET] [--camera sensor] [--random-init]
 
 ``DATASET`` is a ``colorsort-collect`` dataset recorded with the policy's cameras and image size
-(its ``observation.environment_state`` holds each box's colour and pose). The first frames in
+(its ``observation.environment_state`` holds each box's colour and pose); without ``--data`` the
+script records one first, in a temporary folder: ``colorsort-collect --variant jitter --episodes
+12 --boxes-per-episode 3 --seed 9000000`` (seeds no training set or evaluation uses) with the
+policy's cameras and image size. The first frames in
 which each box blocks the ray (the arm at its wait pose, the box in the sensor camera's full view)
 are passed through the policy's own preprocessor and image encoder (ACT: the ResNet-18's last
 feature map, flattened; diffusion: the spatial-softmax keypoints, after the centre crop), and a
@@ -20,6 +23,9 @@ from __future__ import annotations
 
 import argparse
 import os
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
@@ -27,7 +33,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from colorsort.benchmark.policies import LeRobotPolicy  # noqa: E402
+from colorsort.benchmark.policies import LeRobotPolicy, checkpoint_cameras  # noqa: E402
 from colorsort.config import COLORS  # noqa: E402
 from colorsort.data.schema import env_state_names  # noqa: E402
 from colorsort.results import recorded  # noqa: E402
@@ -128,16 +134,31 @@ def probe(features: np.ndarray, targets: dict[str, np.ndarray], episodes: np.nda
     return out
 
 
+def record(policy: str, out: Path) -> Path:
+    """12 jitter demos at the policy's cameras and image size, of seeds no training set or evaluation uses."""
+    cameras, size = checkpoint_cameras(policy)
+    if size is None:
+        raise SystemExit(f"{policy} reads no camera: nothing to probe")
+    subprocess.run([str(Path(sys.executable).parent / "colorsort-collect"), "--variant", "jitter", "--episodes", "12",
+                    "--boxes-per-episode", "3", "--seed", "9000000", "--cameras", ",".join(cameras), "--image-size",
+                    str(size[0]), "--workers", "2", "--out", str(out), "--repo-id", "local/probe"],
+                   check=True, stdout=subprocess.DEVNULL)
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--policy", required=True, help="a LeRobot camera policy's pretrained_model folder")
-    p.add_argument("--data", required=True, type=Path, help="a colorsort-collect dataset at the policy's image size")
+    p.add_argument("--data", type=Path, help="a colorsort-collect dataset at the policy's image size "
+                                             "(default: 12 jitter demos recorded first)")
     p.add_argument("--camera", default="sensor", help="the camera whose images are probed")
     p.add_argument("--random-init", action="store_true", help="also probe the same encoder with random weights")
     args = p.parse_args()
     torch.manual_seed(0)
     policy = LeRobotPolicy(args.policy)
-    images, targets, episodes = frames(args.data, args.camera, policy)
+    with tempfile.TemporaryDirectory() as tmp:
+        data = args.data or record(args.policy, Path(tmp) / "jitter")
+        images, targets, episodes = frames(data, args.camera, policy)
     with torch.no_grad():
         rows = [("raw pixels", images.reshape(len(images), -1)),
                 ("trained encoder", encoder(policy, args.camera)(torch.from_numpy(images)).numpy())]
@@ -148,7 +169,8 @@ def main() -> None:
     boxes = len({(e, round(float(o), 1)) for e, o in zip(episodes, targets["offset_cm"], strict=True)})
     with recorded(__file__):
         print(f"{args.policy}, camera {args.camera}: {len(images)} frames of about {boxes} boxes waiting at the ray "
-              f"in {args.data} ({len(np.unique(episodes))} episodes; fitted on the even ones, scored on the odd)")
+              f"in {args.data or 'jitter demos of seeds 9000000..'} ({len(np.unique(episodes))} episodes; "
+              "fitted on the even ones, scored on the odd)")
         print("| features | size | offset R^2 (held out) | turn R^2 (held out) | colour accuracy (held out) |")
         print("| --- | --- | --- | --- | --- |")
         for name, feats in rows:
