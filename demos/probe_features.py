@@ -120,7 +120,7 @@ def probe(features: np.ndarray, targets: dict[str, np.ndarray], episodes: np.nda
             p = predict(w, f[rows])
             if key == "colour":
                 return float((p.argmax(1) == y2[rows].argmax(1)).mean())
-            return float(1 - ((p - y2[rows]) ** 2).sum() / ((y2[rows] - y2[rows].mean()) ** 2).sum())
+            return float(1 - ((p - y2[rows]) ** 2).sum() / ((y2[rows] - y2[rows].mean(0)) ** 2).sum())
 
         def cv(lam: float, y2: np.ndarray = y2, score=score) -> float:
             held = []
