@@ -1,7 +1,8 @@
 """The cell's cameras: their names, off-screen rendering right side up, and the renderer's settings.
 
-ColorSort names its cameras ``scene``, ``sensor`` (the colour sensor over the pick point) and
-``wrist``; robosuite prefixes the gripper's camera, so ``wrist`` is ``gripper0_right_wrist`` in
+ColorSort names its cameras ``scene``, ``sensor`` (the colour sensor over the pick point),
+``wrist`` and ``snapshot`` (the sensor's view taken when the ray fires, held: ``snapshot.py``);
+robosuite prefixes the gripper's camera, so ``wrist`` is ``gripper0_right_wrist`` in
 the compiled model. Rendering goes through robosuite's ``MjSim``, which owns the GL context.
 """
 
@@ -15,7 +16,10 @@ import mujoco
 import numpy as np
 from robosuite.utils.observables import sensor
 
-CAMERAS: tuple[str, ...] = ("scene", "sensor", "wrist")
+from colorsort.cell.snapshot import SNAPSHOT, SOURCE, Snapshot
+
+PHYSICAL_CAMERAS: tuple[str, ...] = ("scene", "sensor", "wrist")  # rendered live; an env's cameras by default
+CAMERAS: tuple[str, ...] = (*PHYSICAL_CAMERAS, SNAPSHOT)
 DEFAULT_CAMERAS: tuple[str, ...] = ("scene", "wrist")  # what a dataset records and a policy sees by default
 DEFAULT_IMAGE_SIZE: tuple[int, int] = (128, 128)  # (height, width) [px] of every camera by default
 WRIST_CAMERA_MJCF = "gripper0_right_wrist"  # robosuite prefixes the gripper's camera name
@@ -66,14 +70,22 @@ def tune_visual(root: ET.Element) -> None:
 
 
 class CameraRenderer:
-    """Renders the cell's cameras through a robosuite ``MjSim``, timing what it spends.
+    """Renders the cell's cameras through a robosuite ``MjSim``, timing what it spends, and holds the
+    snapshot camera's photo.
 
     Attributes:
         seconds: [s] wall time spent rendering, for benchmarks.
+        snapshot: the snapshot camera's latch (``snapshot.py``).
     """
 
     def __init__(self) -> None:
         self.seconds = 0.0
+        self.snapshot = Snapshot()
+
+    def observe_ray(self, sim, box_detected: bool) -> None:
+        """One observation of the ray, before the cameras': on a box's arrival the snapshot camera
+        takes its photo (the sensor's view) at every size it was asked for."""
+        self.snapshot.observe(box_detected, lambda width, height: self.image(sim, SOURCE, width, height))
 
     @staticmethod
     def hide_rangefinder(sim) -> None:
@@ -85,6 +97,10 @@ class CameraRenderer:
     def image(self, sim, camera: str, width: int, height: int, depth: bool = False):
         """Camera ``camera`` now: (H, W, 3) uint8 RGB, right side up; with ``depth`` also (H, W, 1) [m]."""
         check_cameras([camera])
+        if camera == SNAPSHOT:
+            if depth:
+                raise ValueError("The snapshot camera holds a colour photo, no depth; render 'sensor' for depth")
+            return self.snapshot.image(width, height)
         start = time.perf_counter()
         name = mjcf_name(camera)
         if sim._render_context_offscreen is None:

@@ -45,7 +45,8 @@ class ColorSort(ManipulationEnv):
         preset: name of a ``TaskConfig`` preset ("default", "seed").
         config: a full ``TaskConfig``; overrides ``preset``.
         layout: the cell's geometry.
-        camera_names: any of "scene", "sensor", "wrist".
+        camera_names: any of "scene", "sensor", "wrist", "snapshot" (the sensor's photo taken when the
+            ray last fired, held: ``snapshot.py``); by default the first three.
         control_freq: policy rate [Hz].
         servo_freq: rate [Hz] at which the arm controller recomputes joint torques, held in
             between (a drive's servo period); a divisor of the 500 Hz physics rate.
@@ -68,7 +69,7 @@ class ColorSort(ManipulationEnv):
         render_collision_mesh: bool = False, render_visual_mesh: bool = True, render_gpu_device_id: int = -1,
         control_freq: float = 20, servo_freq: float = 100, lite_physics: bool = True, horizon: int | None = None,
         ignore_done: bool = False, hard_reset: bool = False,
-        camera_names: str | list[str] | tuple[str, ...] = cameras.CAMERAS,
+        camera_names: str | list[str] | tuple[str, ...] = cameras.PHYSICAL_CAMERAS,
         camera_heights: int | list[int] = 128, camera_widths: int | list[int] = 128,
         camera_depths: bool | list[bool] = False, camera_segmentations: Any = None, renderer: str = "mjviewer",
         renderer_config: dict | None = None, seed: int | None = None, reward_scale: float | None = 1.0,
@@ -240,7 +241,8 @@ class ColorSort(ManipulationEnv):
         return cameras.camera_sensors(self.camera_image, cam_name, cam_w, cam_h, cam_d, modality)
 
     def camera_image(self, camera: str, width: int, height: int, depth: bool = False):
-        """Render camera ``camera`` ("scene", "sensor", "wrist") now: (H, W, 3) uint8 RGB, right side up.
+        """Render camera ``camera`` ("scene", "sensor", "wrist") now: (H, W, 3) uint8 RGB, right side up;
+        "snapshot" gives the sensor's photo held since the ray last fired (``snapshot.py``).
 
         With ``depth``, also the depth image (H, W, 1) [m]. Time spent adds to ``render_seconds``.
         """
@@ -278,6 +280,7 @@ class ColorSort(ManipulationEnv):
         if self.has_offscreen_renderer:
             self._cameras.hide_rangefinder(self.sim)
         self.plant.reset(self.cur_time, self.rng)
+        self._cameras.snapshot.clear()
         self._step_reward = 0.0
         self.sim.forward()
 
@@ -323,6 +326,8 @@ class ColorSort(ManipulationEnv):
             self._sample_observables()
 
     def _sample_observables(self) -> None:
+        if self.has_offscreen_renderer:  # before the cameras: a snapshot taken now shows in this observation
+            self._cameras.observe_ray(self.sim, self.box_detected)
         for observable in self._observables.values():
             observable.update(timestep=self._obs_dt, obs_cache=self._obs_cache, force=True)
         self._obs_dt = 0.0

@@ -134,6 +134,7 @@ class ConveyorArena(Arena):
         for name, pos, quat, fovy in (
             ("scene", scene_pos, look_at_quat(scene_pos, scene_target), 45),
             ("sensor", sensor_cam, np.array([1.0, 0.0, 0.0, 0.0]), 45),
+            ("snapshot", sensor_cam, np.array([1.0, 0.0, 0.0, 0.0]), 45),  # the sensor's triggered photo
         ):
             self.worldbody.append(new_element("camera", name=name, pos=pos, quat=quat, mode="fixed", fovy=fovy))
 
