@@ -7,6 +7,7 @@ from colorsort.cell.snapshot import Snapshot
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
 from colorsort.data.replay import MIN_PSNR_DB, replay
+from colorsort.expert.factory import make_expert
 
 
 def test_latch_takes_a_photo_on_the_rays_rising_edge_only():
@@ -59,3 +60,24 @@ def test_recorded_snapshots_replay_from_the_states(tmp_path):
     assert summary.kept == 1
     report = replay(root, 0, "snapshot", None, progress=False)
     assert report.state_mismatches == 0 and report.min_psnr_db >= MIN_PSNR_DB
+
+
+def test_over_the_experts_carry_the_snapshot_shows_the_box_in_the_cup(make_env):
+    """The photo is of the box the cup holds at every step of every carry, turned and offset boxes too."""
+    env = make_env(has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor", "snapshot"],
+                   camera_heights=32, camera_widths=32, lateral_jitter=0.05, yaw_jitter=45.0)
+    obs = env.reset()
+    expert = make_expert(env)
+    expert.reset(obs)
+    pick_xy = np.array(env.layout.pick_point[:2])
+    photographed, carried, saw_box = None, 0, False
+    while len(env.events) < 3 and env.cur_time < 60.0:
+        obs, *_ = env.step(expert.act(obs))
+        if env.box_detected and not saw_box:  # the photo is taken now: of the box nearest the ray
+            photographed = min(env.boxes_in_play(), key=lambda b: np.linalg.norm(env.box_pos(b)[:2] - pick_xy))
+            assert np.array_equal(obs["snapshot_image"], obs["sensor_image"])
+        saw_box = env.box_detected
+        if env.plant.seal.held is not None:
+            assert env.boxes[env.plant.seal.held] is photographed
+            carried += 1
+    assert [e.outcome for e in env.events[:3]] == ["placed"] * 3 and carried > 60
