@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.cell.snapshot import Snapshot
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
@@ -81,3 +82,16 @@ def test_over_the_experts_carry_the_snapshot_shows_the_box_in_the_cup(make_env):
             assert env.boxes[env.plant.seal.held] is photographed
             carried += 1
     assert [e.outcome for e in env.events[:3]] == ["placed"] * 3 and carried > 60
+
+
+def test_a_gymnasium_env_renders_the_snapshot_for_a_policy(closing):
+    env = closing(ColorSortGymEnv("default", cameras=("snapshot", "wrist"), image_size=(32, 32)))
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs) and not obs["pixels"]["snapshot"].any()
+    hold = np.r_[env.env.robots[0].init_qpos, 0.0, -1.0].astype(np.float32)
+    for _ in range(600):
+        obs, *_ = env.step(hold)
+        if env.env.box_detected:
+            break
+    assert env.env.box_detected and obs["pixels"]["snapshot"].std() > 5  # the arriving box's photo
+    assert np.array_equal(obs["pixels"]["snapshot"], env.env.camera_image("sensor", 32, 32))
