@@ -216,22 +216,24 @@ def test_rays_cancel_during_held_interrupts_stops_the_task_after_the_block(clust
     def task() -> str:
         from colorsort.executors.base import held_interrupts
 
+        block_done = False
         try:
             with held_interrupts():
                 Path(flag).touch()
                 time.sleep(2.0)
-            time.sleep(30.0)
+                block_done = True
+            # On a loaded machine Ray's cancel took 40 s to arrive (measured with 3 busy loops on 2 cores):
+            # the task waits long enough that a late cancel still stops it, which is all it may then show.
+            time.sleep(150.0)
             return "ran to its end"
         except KeyboardInterrupt:
-            return "stopped after the block"
+            return "stopped after the block" if block_done else "cut the block short"
 
-    started = time.monotonic()
     ref = ray.remote(task).remote()
     while not inside.exists():
         time.sleep(0.02)
     ray.cancel(ref)
-    assert ray.get(ref, timeout=60) == "stopped after the block"
-    assert time.monotonic() - started < 25
+    assert ray.get(ref, timeout=200) == "stopped after the block"
 
 
 def test_an_interrupt_while_an_episode_saves_keeps_that_episode(reference, monkeypatch, tmp_path):
