@@ -2,8 +2,10 @@
 
 import json
 import os
+import shutil
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -75,6 +77,24 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     assert again.returncode == 0, again.stderr[-3000:]
     assert again.stdout.count("reusing") == 2 + 4 + 6 + 1 and "lerobot-train" not in again.stdout
     assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
+
+    # 1 update: the first update of the 2-update runs, taken, not trained, and what lerobot-train makes of 1
+    shorter = run(argv[:argv.index("--steps")] + ["--steps", "1", "--small-steps", "1"]
+                  + argv[argv.index("--seeds"):] + ["--until", "train"], tmp_path, timeout=600)
+    assert shorter.returncode == 0, shorter.stderr[-3000:]
+    assert shorter.stdout.count("taking the first 1 updates of") == 4 and "lerobot-train" not in shorter.stdout
+    fresh = tmp_path / "fresh"
+    shutil.copytree(out / "data", fresh / "data")
+    trained = run(baseline("--recipe", "state", "--demos", "3", "--train-variants", "default,distractors",
+                           "--late-pass", "0", "--steps", "1", "--seeds", "1000", "--batch-size", "2",
+                           "--workers", "1", "--out", str(fresh), "--until", "train"), tmp_path, timeout=600)
+    assert "lerobot-train" in trained.stdout, trained.stdout[-3000:] + trained.stderr[-3000:]
+    import torch
+    from safetensors.torch import load_file
+
+    taken, made = (load_file(root / "train" / "demos-3-1steps-seed1000" / "checkpoints" / "last" / "pretrained_model"
+                             / "model.safetensors") for root in (out, fresh))
+    assert taken.keys() == made.keys() and all(torch.equal(taken[k], made[k]) for k in taken)
 
 
 @pytest.mark.slow
@@ -209,6 +229,57 @@ def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, m
     assert sorted(p.name for p in (tmp_path / "train").glob("*.json")) == [
         "demos-48-100steps-shift0.1-seed1000.json", "demos-48-100steps-shift0.1-seed1001.json"]
     assert stages.train(recipe, tmp_path / "demos-48", 100, 1000, tmp_path) == first  # reused, its own timing
+
+
+def fake_run(run_dir: Path, steps: int, scheduler: str | None, started: float, seconds_each: float) -> None:
+    """What lerobot-train and stages.train leave for a run of ``steps`` updates, one checkpoint an update."""
+    for step in range(1, steps + 1):
+        model = run_dir / "checkpoints" / f"{step:06d}" / "pretrained_model"
+        model.mkdir(parents=True)
+        (model / "config.json").write_text(json.dumps({"type": "act", "n_action_steps": 10}))
+        (model / "train_config.json").write_text(json.dumps({"steps": steps, "scheduler": scheduler,
+                                                             "policy": {"n_action_steps": 10}}))
+        (model / "model.safetensors").write_text(f"weights after {step}")
+        state = run_dir / "checkpoints" / f"{step:06d}" / "training_state" / "training_step.json"
+        state.parent.mkdir()
+        state.write_text(json.dumps({"step": step}))
+        os.utime(state, (started + step * seconds_each, started + step * seconds_each))
+    (run_dir / "checkpoints" / "last").symlink_to(f"{steps:06d}")
+    run_dir.with_name(run_dir.name + ".json").write_text(json.dumps({"started": started,
+                                                                     "wall_s": steps * seconds_each}))
+
+
+def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_rate(tmp_path, monkeypatch):
+    """With no schedule, a run of 2 updates is the first 2 of a run of 3 with the same data, settings and seed:
+    taken from it (checkpoints, save times, its time to reach 2) instead of trained. Never from another seed's
+    run, a cosine one (its rate depends on the total) or one without that checkpoint."""
+    from colorsort.training import stages
+
+    trained = []
+    monkeypatch.setattr(stages, "run", lambda cmd, log: trained.append(cmd) or 0.0)
+    train = tmp_path / "train"
+    fake_run(train / "demos-8-3steps-shift0.1-seed1000", 3, None, started=1e9, seconds_each=600)
+    fake_run(train / "demos-8-5steps-shift0.1-seed1000", 5, None, started=2e9, seconds_each=60)
+    fake_run(train / "demos-8-3steps-cos-shift0.1-seed1001", 3, "cosine_annealing_with_warmup", 1e9, 60)
+    fake_run(train / "demos-8-3steps-shift0.1-seed1002", 3, None, started=1e9, seconds_each=60)
+    recipe = get_recipe("camera", image_shift=0.1)
+
+    run_dir, timing = stages.train(recipe, tmp_path / "demos-8", 2, 1000, tmp_path)
+    assert not trained and run_dir.name == "demos-8-2steps-shift0.1-seed1000"
+    assert timing == {"started": 1e9, "wall_s": 1200.0, "first_updates_of": "demos-8-3steps-shift0.1-seed1000"}
+    assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["000001", "000002", "last"]
+    assert (run_dir / "checkpoints" / "last" / "pretrained_model" / "model.safetensors").read_text() == \
+        "weights after 2"
+    assert [(step, minutes) for step, minutes, _ in stages.checkpoints(run_dir, timing)] == [(1, 10.0), (2, 20.0)]
+    assert stages.train(recipe, tmp_path / "demos-8", 2, 1000, tmp_path) == (run_dir, timing)  # reused now
+
+    stages.train(recipe, tmp_path / "demos-8", 4, 1000, tmp_path)  # the 5-update run: the shortest with 4
+    assert not trained
+    stages.train(get_recipe("camera", image_shift=0.1, policy=replace(recipe.policy, lr_schedule="cosine")),
+                 tmp_path / "demos-8", 2, 1001, tmp_path)
+    stages.train(recipe, tmp_path / "demos-8", 2, 1001, tmp_path)  # seed 1001's only run is another recipe's
+    stages.train(recipe, tmp_path / "demos-8", 6, 1002, tmp_path)  # nothing longer than 6
+    assert [next(a for a in cmd if a.startswith("--steps=")) for cmd in trained] == ["--steps=2"] * 2 + ["--steps=6"]
 
 
 def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):

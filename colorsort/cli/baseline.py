@@ -108,10 +108,11 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
     if args.list:
+        width, label_width = max(map(len, RECIPES)), max(len(r.label) for r in RECIPES.values())
         for r in RECIPES.values():
             length = f"{r.passes:g} passes" if r.passes else f"{r.steps} updates"
             seeds = f"{len(r.seeds)} seed" + ("s" if len(r.seeds) > 1 else "")
-            print(f"{r.name:<16} {r.label:<20} demos {','.join(map(str, r.demos))} from "
+            print(f"{r.name:<{width}}  {r.label:<{label_width}} demos {','.join(map(str, r.demos))} from "
                   f"{'+'.join(r.train_variants)}, {length} x {seeds} on {r.device}")
         return 0
     try:  # a bad number in --demos or a weight is a ValueError too

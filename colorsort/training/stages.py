@@ -7,7 +7,8 @@ Layout of the working folder ``out``::
                               -noturn: --no-turn)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
     train/demos-<N>-<S>steps[-cos][-shift<F>]-seed<K>/  lerobot-train's run of S updates with seed K
-                              (-cos: cosine learning rate; -shift<F>: images shifted up to F); <run>.json its timing
+                              (-cos: cosine learning rate; -shift<F>: images shifted up to F); <run>.json its timing;
+                              under a constant rate, the first S updates of a longer run if there is one
     eval/<run>-<exec>-<variant>.json  colorsort-eval's report of the run's last checkpoint, executing its
                               chunks as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
     curve/<run>-<exec>-<step>.json    colorsort-eval's report of an earlier checkpoint (the learning curve)
@@ -16,8 +17,10 @@ Layout of the working folder ``out``::
 
 from __future__ import annotations
 
+import glob
 import json
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -119,11 +122,53 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
     if run_dir.exists():
         print(f"removing {run_dir}, an unfinished training run")
         shutil.rmtree(run_dir)
+    longer = longer_run(run_dir, steps)
+    if longer is not None:
+        print(f"taking the first {steps} updates of {longer}")
+        timing = first_updates(longer, steps, run_dir)
+        timing_path.write_text(json.dumps(timing))
+        set_inference(run_dir, recipe)
+        return run_dir, timing
     started = time.time()
     seconds = run(train_command(recipe, data, steps, seed, run_dir), out / "logs" / f"train-{run_dir.name}.log")
     timing = {"started": started, "wall_s": round(seconds, 1)}
     timing_path.write_text(json.dumps(timing))
     return run_dir, timing
+
+
+def longer_run(run_dir: Path, steps: int) -> Path | None:
+    """A finished run like ``run_dir`` (same data, settings and seed) but longer, with a checkpoint at ``steps``.
+
+    Under a constant learning rate (``train_config.json``'s ``scheduler`` null) nothing in ``lerobot-train``'s
+    first ``steps`` updates depends on the total (the sampler, the augmentations and the optimizer draw from the
+    seed alone), so that checkpoint is the last one of a run of ``steps`` updates. A schedule (cosine) depends on
+    the total: such a run is never used.
+    """
+    name = re.fullmatch(r"(.+)-(\d+)steps(.*)", run_dir.name)
+    assert name is not None, run_dir
+    found = []
+    for other in run_dir.parent.glob(f"{glob.escape(name[1])}-*steps{glob.escape(name[3])}"):
+        match = re.fullmatch(rf"{re.escape(name[1])}-(\d+)steps{re.escape(name[3])}", other.name)
+        model = other / "checkpoints" / f"{steps:06d}" / "pretrained_model"
+        if (match and int(match[1]) > steps and (model / "train_config.json").is_file()
+                and other.with_name(other.name + ".json").is_file()
+                and json.loads((model / "train_config.json").read_text()).get("scheduler") is None):
+            found.append((int(match[1]), other))
+    return min(found)[1] if found else None
+
+
+def first_updates(longer: Path, steps: int, run_dir: Path) -> dict:
+    """``run_dir`` made of ``longer``'s checkpoints up to ``steps`` (copied, times kept); its timing.
+
+    Its wall time is the time ``longer`` took to reach ``steps`` (its checkpoint's save time minus its start)."""
+    timing = json.loads(longer.with_name(longer.name + ".json").read_text())
+    for step_dir in sorted((longer / "checkpoints").iterdir()):
+        if step_dir.name.isdigit() and not step_dir.is_symlink() and int(step_dir.name) <= steps:
+            shutil.copytree(step_dir, run_dir / "checkpoints" / step_dir.name, copy_function=shutil.copy2)
+    (run_dir / "checkpoints" / "last").symlink_to(f"{steps:06d}")
+    saved = (run_dir / "checkpoints" / "last" / "training_state" / "training_step.json").stat().st_mtime
+    return {"started": timing["started"], "wall_s": round(saved - timing["started"], 1),
+            "first_updates_of": longer.name}
 
 
 def set_inference(run_dir: Path, recipe: Recipe) -> None:
