@@ -17,7 +17,8 @@ from colorsort.training.recipes import RECIPES, get_recipe
 
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
-SHIPPED = {name: REPO / "baselines" / name for name in ("act-state", "act-camera", "act-camera-tracking")}
+SHIPPED = {name: REPO / "baselines" / name
+           for name in ("act-state", "act-camera", "act-camera-snapshot", "act-camera-tracking")}
 
 
 def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProcess:
@@ -383,7 +384,7 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])
+@pytest.mark.parametrize("name", list(SHIPPED))
 def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
     """README's command for a shipped policy on its main variant's first seed: cameras come from the checkpoint."""
     if not SHIPPED[name].is_dir():
@@ -399,7 +400,7 @@ def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["act-state", "act-camera", "act-camera-tracking"])
+@pytest.mark.parametrize("name", list(SHIPPED))
 def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
     """README's lerobot-eval command for a shipped policy, one episode."""
     if not SHIPPED[name].is_dir():
