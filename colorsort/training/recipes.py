@@ -216,16 +216,11 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
            train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),
            demos=(48,), late_pass=100, steps=8000, save_every=2000, seeds=(1000, 1001, 1002), image_shift=0.1),
     # the camera recipe with the sensor's triggered photo in place of its live view: the colour stays in
-    # view over the carry (ACT reads one frame). Seed 1000 at 4,000 updates (57 min here): jitter 65%, the
-    # other five variants 100%; trained on to 6,000 (89 min): jitter 55%, the rest unchanged. Seed 1000's run
-    # is that 6,000-update run's first 4,000 (saved every 2,000), so the curve is seed 1001's (every 1,000)
+    # view over the carry (ACT reads one frame). The far (blue) bin is the last motion learnt: seed 1000 at
+    # 2,000 updates and seed 1001 at 1,000-4,000 carried every blue box past it; both placed them at 6,000
     Recipe("camera-snapshot", cameras=("snapshot", "wrist"), image_size=32, batch_size=32,
            train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),
-           demos=(48,), late_pass=100, steps=4000, save_every=1000, seeds=(1001, 1002, 1000), image_shift=0.1),
-    # camera-tracking with the triggered photo in place of the live sensor: its failures were wrong bins
-    Recipe("camera-snapshot-tracking", policy=TRACKING_ACT, cameras=("snapshot", "wrist"), image_size=64,
-           batch_size=32, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(48,), boxes_per_episode=5,
-           steps=3600, save_every=1200, main_variant="tracking", eval_variants=TRACKING_VARIANTS),
+           demos=(48,), late_pass=100, steps=6000, save_every=2000, seeds=(1000, 1001, 1002), image_shift=0.1),
     # 3600 updates: the same run trained on to 4500 (identical up to 3600) fell from 66% to 0% on tracking
     Recipe("camera-tracking", policy=TRACKING_ACT, cameras=("sensor", "wrist"), image_size=64, batch_size=32,
            train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(48,), boxes_per_episode=5, steps=3600,
