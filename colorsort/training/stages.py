@@ -17,7 +17,6 @@ Layout of the working folder ``out``::
 
 from __future__ import annotations
 
-import glob
 import json
 import os
 import re
@@ -147,7 +146,7 @@ def longer_run(run_dir: Path, steps: int) -> Path | None:
     name = re.fullmatch(r"(.+)-(\d+)steps(.*)", run_dir.name)
     assert name is not None, run_dir
     found = []
-    for other in run_dir.parent.glob(f"{glob.escape(name[1])}-*steps{glob.escape(name[3])}"):
+    for other in run_dir.parent.glob("*"):  # none when train/ is not there yet
         match = re.fullmatch(rf"{re.escape(name[1])}-(\d+)steps{re.escape(name[3])}", other.name)
         model = other / "checkpoints" / f"{steps:06d}" / "pretrained_model"
         if (match and int(match[1]) > steps and (model / "train_config.json").is_file()
