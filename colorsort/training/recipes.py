@@ -12,7 +12,10 @@ length, and which variants score it.
 - ``camera``: the ``sensor`` and ``wrist`` cameras at 32 px and ``observation.state`` only
   (joints, cup, suction, ray, belt): what a real cell has. ResNet-18 from scratch, every training
   image shifted at random by up to 0.1 of its size, on 2 CPU cores.
-- ``camera-tracking``: the same on the never-stopping belt, whose state adds the belt encoder.
+- ``camera-snapshot``: ``camera`` with the ``snapshot`` camera (the sensor's photo of the box taken
+  when it reached the ray, held until the next) in place of the live ``sensor``: the colour stays in
+  view while the box is carried. The policy in ``baselines/act-camera-snapshot``.
+- ``camera-tracking``: ``camera`` at 64 px on the never-stopping belt, whose state adds the belt encoder.
 - ``camera-diffusion``: the ``camera`` demos at 64 px, learned by LeRobot's diffusion policy, whose
   image encoder (GroupNorm, spatial-softmax keypoints, random crops) is built to locate things.
 - ``camera-large``: LeRobot's ACT size on 128 px images, for a GPU (``--device cuda``).
