@@ -220,7 +220,8 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
            demos=(48,), late_pass=100, steps=8000, save_every=2000, seeds=(1000, 1001, 1002), image_shift=0.1),
     # the camera recipe with the sensor's triggered photo in place of its live view: the colour stays in
     # view over the carry (ACT reads one frame). The far (blue) bin is the last motion learnt: seed 1000 at
-    # 2,000 updates and seed 1001 at 1,000-4,000 carried every blue box past it; both placed them at 6,000
+    # 2,000 updates and seed 1001 at 1,000-4,000 carried every blue box past it; both placed them at 6,000,
+    # where seed 1002 still put every red box in the green bin (default 32%)
     Recipe("camera-snapshot", cameras=("snapshot", "wrist"), image_size=32, batch_size=32,
            train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),
            demos=(48,), late_pass=100, steps=6000, save_every=2000, seeds=(1000, 1001, 1002), image_shift=0.1),
