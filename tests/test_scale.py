@@ -208,9 +208,9 @@ def test_an_interrupt_during_held_interrupts_comes_after_the_block():
         signal.signal(signal.SIGINT, previous)
 
 
-@pytest.mark.xfail(strict=False, reason="in the full suite on 2 cores (4 fresh-clone CI runs, 2026-11-25/26) Ray's "
-                   "cancel never reached the task; this file alone passes idle, under load and in an xdist worker: "
-                   "state left by another file in the same process is suspected, not found")
+@pytest.mark.xfail(strict=False, reason="in the full suite on 2 cores (5 fresh-clone CI runs, 2026-11-25/26) Ray's "
+                   "cancel never reached the task; this file alone passes idle, under load, in an xdist worker and "
+                   "with SIGINT ignored: state left by another file in the same process is suspected, not found")
 def test_rays_cancel_during_held_interrupts_stops_the_task_after_the_block(cluster, tmp_path):
     """Ray cancels a task with a simulated SIGINT; the task's real SIGINT does nothing, so the held interrupt
     must be delivered by calling the handler (CI caught a cancelled collection that ran to its end)."""
