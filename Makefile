@@ -72,8 +72,8 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_suite.py --episodes 10
 	$(VENV)/bin/python demos/probe_features.py --policy baselines/act-camera --random-init
 	$(VENV)/bin/python demos/probe_features.py --policy baselines/act-camera --camera wrist --random-init
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking --episodes 20
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking-jitter --executions chunk10,ens0.01 --episodes 20
+	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking --executions chunk10,ens0.01,ens0.2 --episodes 20
+	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking-jitter --executions chunk10,ens-0.1,ens0.01,ens0.05,ens0.2,ens0.5 --episodes 20
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-state --variant fast --episodes 10
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter --executions chunk20,chunk10,chunk5 --episodes 20
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter,seed,default,fast,lighting,distractors --executions chunk10,ens0.01 --episodes 20

@@ -292,6 +292,14 @@ def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
     part = tmp_path / "data" / "seed-1-b1"
     assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["boxes_per_episode"] == 1
     assert size(root) == size(part) and size(root)[0] == 1
+    assert (root / "meta" / "complete").read_text().split() == ["seed-1-b1"]
+
+    other_mix = get_recipe("state", train_mix=(("default", 1),), demos=(1,), late_pass=0)
+    with pytest.raises(ValueError, match=r"merged from \['seed-1-b1'\].*--fresh"):
+        collect(other_mix, 1, tmp_path, workers=1)  # demos-1 is seed's: never trained on as default's
+    assert not (tmp_path / "data" / "default-1").exists() and size(root)[0] == 1
+    assert colorsort_baseline.main(["--recipe", "state", "--train-variants", "default", "--demos", "1",
+                                    "--late-pass", "0", "--out", str(tmp_path), "--until", "data"]) == 2
 
 
 def test_a_recipe_without_the_turn_collects_its_demos_with_no_turn(tmp_path):
@@ -357,8 +365,8 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
     from colorsort.training.stages import set_inference
 
     act = get_recipe("camera-tracking").policy
-    assert (act.type, act.n_action_steps, act.temporal_ensemble_coeff, act.execution) == ("act", 1, 0.01, "ens0.01")
-    assert "--policy.temporal_ensemble_coeff=0.01" in act.args(64) and "--policy.n_action_steps=1" in act.args(64)
+    assert (act.type, act.n_action_steps, act.temporal_ensemble_coeff, act.execution) == ("act", 1, 0.2, "ens0.2")
+    assert "--policy.temporal_ensemble_coeff=0.2" in act.args(64) and "--policy.n_action_steps=1" in act.args(64)
     assert get_recipe("state").policy.execution == get_recipe("camera").policy.execution == "chunk10"
     assert get_recipe("state-tracking").policy == act
     with pytest.raises(ValueError, match="n_action_steps=1"):
@@ -378,9 +386,9 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
     for step in ("000001", "000002", "last"):
         model = run_dir / "checkpoints" / step / "pretrained_model"
         assert json.loads((model / "config.json").read_text()) == {
-            "type": "act", "dim_model": 128, "n_action_steps": 1, "temporal_ensemble_coeff": 0.01}
+            "type": "act", "dim_model": 128, "n_action_steps": 1, "temporal_ensemble_coeff": 0.2}
         assert json.loads((model / "train_config.json").read_text()) == {
-            "steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.01}}
+            "steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.2}}
 
 
 @pytest.mark.slow

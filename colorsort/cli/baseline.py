@@ -18,8 +18,9 @@ and a README of how it was made.
 
 Finished stages under OUT (a dataset with its marker, a training run with its last checkpoint,
 an evaluation's JSON) are reused, so an interrupted run goes on where it stopped and ``--until``
-splits the work into sittings; ``--fresh`` starts over.
-Exit status 0 done, 1 a stage failed, 2 bad arguments.
+splits the work into sittings; ``--fresh`` starts over. A merged demo set from another ``--train-variants``
+mix is refused (exit 2), never trained on.
+Exit status 0 done, 1 a stage failed, 2 bad arguments or an OUT holding another mix's demos.
 """
 
 from __future__ import annotations
@@ -133,6 +134,9 @@ def main(argv: list[str] | None = None) -> int:
     except RuntimeError as err:
         print(f"colorsort-baseline: {err}", file=sys.stderr)
         return 1
+    except ValueError as err:  # OUT holds a stage of other settings: nothing is overwritten
+        print(f"colorsort-baseline: error: {err}", file=sys.stderr)
+        return 2
     return 0
 
 

@@ -54,14 +54,18 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     first episodes of a larger one's. With cameras the merged set loses ``observation.environment_state``:
     a camera policy must see the boxes, not read them from the simulator."""
     root = out / "data" / f"demos-{n}{recipe.data_suffix}"
-    if (root / "meta" / "info.json").is_file() and (root / "meta" / "complete").is_file():
+    split = recipe.split(n)
+    parts = [out / "data" / part_name(recipe, variant, count) for variant, count in split.items()]
+    marker = root / "meta" / "complete"
+    if (root / "meta" / "info.json").is_file() and marker.is_file():
+        merged_from = marker.read_text().split()
+        if merged_from and merged_from != [p.name for p in parts]:  # an empty marker predates the record
+            raise ValueError(f"{root} was merged from {merged_from}, not {[p.name for p in parts]} "
+                             f"(another --train-variants mix): give another --out, or --fresh to rebuild it")
         print(f"reusing {root}")
         return root
-    parts = []
-    for k, (variant, count) in enumerate(recipe.split(n).items()):
+    for k, ((variant, count), part) in enumerate(zip(split.items(), parts)):
         boxes = recipe.boxes(variant)
-        part = out / "data" / f"{variant}-{count}{'' if boxes == recipe.boxes_per_episode else f'-b{boxes}'}" \
-                              f"{recipe.data_suffix}"
         if not (part / "meta" / "colorsort.json").is_file():
             shutil.rmtree(part, ignore_errors=True)
             run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
@@ -72,9 +76,14 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
                 out / "logs" / f"collect-{part.name}.log")
         else:
             print(f"reusing {part}")
-        parts.append(part)
     merge(parts, root, drop_box_state=bool(recipe.cameras))
     return root
+
+
+def part_name(recipe: Recipe, variant: str, count: int) -> str:
+    """The folder of ``count`` demos of one training variant: ``jitter-8-late100``, ``seed-4-b1-late100``."""
+    boxes = recipe.boxes(variant)
+    return f"{variant}-{count}{'' if boxes == recipe.boxes_per_episode else f'-b{boxes}'}{recipe.data_suffix}"
 
 
 def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
@@ -91,7 +100,7 @@ def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
         remove_feature(LeRobotDataset(REPO_ID, root=merged), "observation.environment_state", output_dir=root,
                        repo_id=REPO_ID)
         shutil.rmtree(merged)
-    (root / "meta" / "complete").write_text("")
+    (root / "meta" / "complete").write_text("\n".join(p.name for p in parts) + "\n")  # what it was merged from
 
 
 def size(data: Path) -> tuple[int, int]:
