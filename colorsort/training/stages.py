@@ -64,7 +64,7 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
                              f"(another --train-variants mix): give another --out, or --fresh to rebuild it")
         print(f"reusing {root}")
         return root
-    for k, ((variant, count), part) in enumerate(zip(split.items(), parts)):
+    for k, ((variant, count), part) in enumerate(zip(split.items(), parts, strict=True)):
         boxes = recipe.boxes(variant)
         if not (part / "meta" / "colorsort.json").is_file():
             shutil.rmtree(part, ignore_errors=True)
