@@ -63,6 +63,8 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_sort.py --robot UR5e --seeds 2 --boxes 10
 	$(VENV)/bin/python demos/bench_tracking.py --seeds 10 --boxes 20 --workers 2
 	$(VENV)/bin/python demos/bench_bound.py
+	$(VENV)/bin/python demos/bench_bound.py --jerk 1500
+	$(VENV)/bin/python demos/bench_bound.py --jerk 5000
 	$(VENV)/bin/python demos/soak.py --preset tracking-fast --boxes 2000
 	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot Panda --seeds 2 --boxes 10
 	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot UR5e --seeds 2 --boxes 10

@@ -153,6 +153,23 @@ def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env
     assert 60.0 * 20 / env.events[19].time >= 28.0
 
 
+def test_the_wait_in_an_interception_is_its_duration_beyond_the_time_optimal_plan():
+    """An approach told to take 0.5 s longer than it needs (the box not yet within reach) waited 0.5 s; one
+    planned time-optimally, from a moving start to a moving goal, waited nothing."""
+    from colorsort.expert.bound import waiting_time
+    from colorsort.expert.planning import MotionConfig, plan_motion
+
+    vmax, motion = np.full(6, 3.0), MotionConfig()
+    start, goal = np.zeros(6), np.array([0.6, -0.3, 0.2, 0.0, 0.4, -0.5])
+    moving = np.array([0.05, 0.0, -0.02, 0.0, 0.0, 0.01])  # [rad/s]
+    fastest = plan_motion(start, goal, vmax, motion, start_velocity=moving, goal_velocity=moving)
+    assert waiting_time(fastest, motion, vmax) == pytest.approx(0.0, abs=1e-6)
+    slow = plan_motion(start, goal, vmax, motion, start_velocity=moving, goal_velocity=moving,
+                       minimum_duration=fastest.duration + 0.5)
+    assert slow.duration == pytest.approx(fastest.duration + 0.5)
+    assert waiting_time(slow, motion, vmax) == pytest.approx(0.5, abs=1e-6)
+
+
 def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_env):
     """A box standing at x = 0.45 m, the red bin: each leg of the bound is the largest joint move over its
     datasheet speed, each leg of the ruckig reference is ruckig's own plan (never shorter), and the expert's

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from colorsort.expert.planning import Waypoint, plan_motion
+from colorsort.expert.planning import JointTrajectory, MotionConfig, Waypoint, plan_motion
 from colorsort.expert.tracking import TrackingExpert
 
 LEGS = ("down onto the box", "seal", "lift", "carry to the bin", "release", "back over the next box")
@@ -87,3 +87,13 @@ def shortest_cycle(expert: TrackingExpert, color: str, mode: str = "speed", step
     lo, hi = expert.window
     return min((cycle_at(expert, float(x), color, mode) for x in np.arange(lo, hi + 1e-9, step)),
                key=lambda c: c.total)
+
+
+def waiting_time(approach: JointTrajectory, motion: MotionConfig, max_velocity: np.ndarray) -> float:
+    """[s] how much of a planned interception ``approach`` waits for the box to come within reach: its
+    duration less that of the time-optimal plan between the same states (same limits, no minimum duration)."""
+    q0, qd0, qdd0 = approach.sample(0.0)
+    q1, qd1, _ = approach.sample(approach.duration)
+    fastest = plan_motion(q0, q1, max_velocity, motion, start_velocity=qd0, start_acceleration=qdd0,
+                          goal_velocity=qd1)
+    return max(approach.duration - fastest.duration, 0.0)
