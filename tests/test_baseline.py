@@ -449,6 +449,14 @@ def test_docs_tables_are_the_ones_scores_json_gives():
             assert any(f"<!-- scores baselines/{name} table -->" in t for t in text.values()), name
 
 
+def test_training_times_over_seeds_read_as_one_figure_when_they_round_alike():
+    from colorsort.training.report import span
+
+    assert span([53.6, 53.9, 54.2]) == "54"
+    assert span([49.2, 57.4]) == "49-57"
+    assert span([42.0]) == "42"
+
+
 def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
     from colorsort.training.tables import fill
 

@@ -3,7 +3,7 @@
 Example::
 
     colorsort-baseline --recipe camera                 # the camera policy: about 1 h 40 min on 2 CPU cores
-    colorsort-baseline --recipe camera-tracking --seeds 1001 --ship baselines/act-camera-tracking  # about 1 h 15 min
+    colorsort-baseline --recipe camera-tracking --ship baselines/act-camera-tracking  # 3 seeds: about 3 h 30 min
     colorsort-baseline --recipe state --demos 8,40 --steps 2500
     colorsort-baseline --list
 

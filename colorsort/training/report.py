@@ -38,6 +38,12 @@ SUMMARY_COLUMNS = ("variant", "policy", "demos", "training (each seed)", "succes
                    "each seed", "episodes per seed", "correct", "misplaced", "dropped")
 
 
+def span(values: list[float]) -> str:
+    """``"lo-hi"`` of ``values`` rounded to whole numbers, or the one number when both ends round alike."""
+    lo, hi = f"{min(values):.0f}", f"{max(values):.0f}"
+    return lo if lo == hi else f"{lo}-{hi}"
+
+
 def summary_table(rows: list[dict], label: str) -> str:
     """A Markdown table: one row per (demo count, variant), its training seeds' success as mean, range and each.
 
@@ -50,7 +56,7 @@ def summary_table(rows: list[dict], label: str) -> str:
     lines = ["| " + " | ".join(SUMMARY_COLUMNS) + " |", "|" + " --- |" * len(SUMMARY_COLUMNS)]
     for g in groups.values():
         rates = [100 * r["success_rate"] for r in g]
-        minutes = f"{min(r['train_minutes'] for r in g):.0f}-{max(r['train_minutes'] for r in g):.0f}"
+        minutes = span([r["train_minutes"] for r in g])
         cells = [g[0]["variant"], label, str(g[0]["demos"]), f"{updates(g[0])}, {minutes} min",
                  f"{sum(rates) / len(rates):.0f}% ({min(rates):.0f}-{max(rates):.0f}%), {len(g)} seeds",
                  ", ".join(f"{x:.0f}%" for x in rates), str(g[0]["episodes"]),

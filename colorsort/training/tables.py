@@ -24,7 +24,7 @@ import re
 from collections import Counter
 from pathlib import Path
 
-from colorsort.training.report import curve_table, summary_table
+from colorsort.training.report import curve_table, span, summary_table
 
 KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
@@ -92,8 +92,7 @@ def headline(folder: Path) -> str:
         first = largest[0]
         minutes = [r["train_minutes"] for r in largest]
         seeds = len(next(iter(by_variant.values())))
-        span = f"{min(minutes):.0f}-{max(minutes):.0f} min" if seeds > 1 else f"{minutes[0]:.0f} min"
-        training = (f"{first['demos']} demos, {first['steps']} updates, {span} on the CPU"
+        training = (f"{first['demos']} demos, {first['steps']} updates, {span(minutes)} min on the CPU"
                     + (f" per seed, {seeds} seeds" if seeds > 1 else ""))
         name = path.parent.name
         policy, _, inputs = label(scores).partition(", ")
