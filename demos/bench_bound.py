@@ -32,7 +32,8 @@ from colorsort.expert.tracking import Phase as TrackingPhase
 from colorsort.expert.tracking import TrackingExpert
 from colorsort.results import recorded
 
-ACTIVE = ("intercept box", "track box", "move over bin", "release")  # the expert's phases that a cycle needs
+ACTIVE = tuple(p.value for p in (TrackingPhase.INTERCEPT, TrackingPhase.TRACK, TrackingPhase.MOVE_OVER_BIN,
+                                 TrackingPhase.RELEASE))  # the expert's phases that a cycle needs
 
 
 def main() -> None:
@@ -126,23 +127,32 @@ class Tally:
 def run_expert(config: ExpertConfig, preset: str, seed: int, boxes: int | None = None, seconds: float | None = None,
                spawn_period: float | None = None) -> Tally:
     """Run the IRB 140's expert (``config``) until ``boxes`` boxes have left play or ``seconds`` [s] of sim time
-    have passed, a box spawned every ``spawn_period`` [s] (the preset's by default)."""
-    limit = sorting_time_limit(boxes, make_config(preset)) if boxes is not None else float(seconds) + 10.0
-    extra = {} if spawn_period is None else {"spawn_period": spawn_period}
-    env = ColorSort(robots="IRB140", preset=preset, has_offscreen_renderer=True, use_camera_obs=False,
-                    ignore_done=True, seed=seed, time_limit=limit, **extra)
+    have passed (one of the two), a box spawned every ``spawn_period`` [s] (the preset's by default)."""
+    task = make_config(preset)
+    if spawn_period is not None:
+        task = replace(task, spawn_period=spawn_period)
+    if boxes is not None and seconds is None:
+        count, end = float(boxes), sorting_time_limit(boxes, task)
+        time_limit = end
+    elif seconds is not None and boxes is None:
+        count, end = float("inf"), seconds
+        time_limit = end + 10.0
+    else:
+        raise ValueError(f"boxes={boxes}, seconds={seconds}: give one of the two")
+    env = ColorSort(robots="IRB140", config=replace(task, time_limit=time_limit), has_offscreen_renderer=True,
+                    use_camera_obs=False, ignore_done=True, seed=seed)
     obs = env.reset()
     expert = make_expert(env, config)
     assert isinstance(expert, TrackingExpert)
     expert.reset(obs)
     tally, before = Tally(), None
-    while (len(env.events) < boxes if boxes is not None else env.cur_time < seconds) and env.cur_time < limit:
+    while len(env.events) < count and env.cur_time < end:
         action = expert.act(obs)
         phase = expert.phase
         if phase is TrackingPhase.INTERCEPT and before is not TrackingPhase.INTERCEPT:
-            approach = expert.motion.trajectory if expert.motion is not None else None
-            assert isinstance(approach, JointTrajectory), "an interception is a planned ruckig motion"
-            tally.waited += waiting_time(approach, expert.config.motion, expert.calibration.max_velocity)
+            assert expert.motion is not None and isinstance(expert.motion.trajectory, JointTrajectory)
+            tally.waited += waiting_time(expert.motion.trajectory, expert.config.motion,
+                                         expert.calibration.max_velocity)
         before = phase
         tally.phases[phase.value] = tally.phases.get(phase.value, 0.0) + env.control_timestep
         obs, *_ = env.step(action)
