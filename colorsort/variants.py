@@ -19,6 +19,8 @@ from colorsort.config import COLORS, Lighting, TaskConfig, make_config, sorting_
 from colorsort.robots import get_robot
 
 EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
+# for choosing among a training run's checkpoints (``colorsort.training.selection``): never scored, never collected
+VALIDATION_SEEDS: tuple[int, ...] = tuple(range(20_000, 20_050))
 
 
 @dataclass(frozen=True)

@@ -694,3 +694,63 @@ def test_the_feature_probe_runs_on_a_shipped_camera_policy(tmp_path):
     assert [r.split(" | ")[:2] for r in rows[1:]] == [["| raw pixels", "3072"], ["| trained encoder", "512"],
                                                         ["| random encoder", "512"]]
     assert "4 episodes" in out.stdout and "40 frames" in out.stdout  # 5 frames of each of 8 boxes
+
+
+def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluation_seeds(tmp_path, monkeypatch):
+    """A recipe with select_episodes plays every checkpoint of each seed's run on the validation seeds of each
+    training variant; the one with the most successes there (ties: most boxes right, then the later) is scored on
+    the evaluation seeds, shipped, marked in the tables, and its point on the learning curve is its full score's."""
+    from colorsort.training import pipeline, ship, stages
+    from colorsort.variants import EVAL_SEEDS, VALIDATION_SEEDS
+
+    assert not set(VALIDATION_SEEDS) & set(EVAL_SEEDS)
+    validation = {  # successes on the validation seeds, per (seed, update): seed 1000 peaks at 2, 1001 ties 2 and 3
+        (1000, 1): 1, (1000, 2): 4, (1000, 3): 2, (1001, 1): 0, (1001, 2): 3, (1001, 3): 3}
+    evaluated: list[tuple[str, str, int | None]] = []
+
+    def fake_evaluate(recipe, model, variant, episodes, path, envs, log, first_seed=None):
+        step = int(Path(model).parent.name) if Path(model).parent.name.isdigit() else 3
+        seed = int(str(model).split("-seed")[1][:4])
+        evaluated.append((Path(model).parent.name, variant, first_seed))
+        successes = validation[seed, step] // 2 if first_seed is not None else step
+        episodes_run = 2 if first_seed is not None else episodes
+        return {"variant": variant, "episodes": episodes_run, "successes": successes,
+                "success_rate": successes / episodes_run, "success_ci95": [0.0, 1.0], "correct": 3 * successes,
+                "misplaced": 0, "dropped": 0, "distractors": 0, "distractors_let_through": 0,
+                "boxes_per_minute": 1.0, "mean_cycle_time_s": 2.0,
+                "per_episode": [{"success": k < successes, "correct": 3 * (k < successes), "misplaced": 0,
+                                 "dropped": 0} for k in range(episodes_run)]}
+
+    def fake_train(recipe, data, steps, seed, out):
+        run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
+        fake_run(run_dir, steps, None, started=1e9, seconds_each=60)
+        return run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
+
+    monkeypatch.setattr(stages, "collect", lambda recipe, n, out, workers: out / "data" / f"demos-{n}")
+    monkeypatch.setattr(stages, "size", lambda data: (4, 400))
+    monkeypatch.setattr(stages, "train", fake_train)
+    monkeypatch.setattr(stages, "evaluate", fake_evaluate)
+    monkeypatch.setattr(ship, "parameters", lambda model: 1000)  # the fake runs' weights are text
+    recipe = get_recipe("state-tracking", demos=(4,), steps=3, save_every=1, select_episodes=2, seeds=(1000, 1001),
+                        eval_variants=("tracking", "tracking-jitter"), eval_episodes=4, other_episodes=4,
+                        curve_episodes=4)
+    ship_to = tmp_path / "shipped"
+    results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / "out", envs=1), "cmd", ship_to)
+
+    first = VALIDATION_SEEDS[0]
+    chose = [e for e in evaluated if e[2] is not None]
+    assert chose == [(f"{s:06d}", v, first) for _ in (1000, 1001) for s in (1, 2, 3)
+                     for v in ("tracking", "tracking-jitter")]
+    scored = [(e[0], e[1]) for e in evaluated if e[2] is None]
+    assert scored[:2] == [("000002", "tracking"), ("000002", "tracking-jitter")]  # seed 1000: update 2
+    assert scored[-2:] == [("last", "tracking"), ("last", "tracking-jitter")]  # seed 1001's tie: the later (3)
+    assert [(r["seed"], r["checkpoint"], r["success_rate"]) for r in results["rows"]] == [
+        (1000, 2, 0.5), (1000, 2, 0.5), (1001, 3, 0.75), (1001, 3, 0.75)]
+    assert [p["successes"] for p in results["rows"][0]["validation"]] == [0, 4, 2]  # 2 variants, half each
+    assert [(p["step"], p["successes"]) for p in results["curve"]] == [(1, 1), (2, 2), (3, 3)]
+    assert (ship_to / "model.safetensors").read_text() == "weights after 2"
+    readme = (ship_to / "README.md").read_text()
+    assert "scored at 2/3 (chosen on validation seeds)" in readme and "| 1000 | 2 (chosen) |" in readme
+    assert f"({first} on, never scored" in readme
+    with pytest.raises(ValueError, match="save_every"):
+        get_recipe("camera-tracking", save_every=0)

@@ -56,6 +56,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--batch-size", type=int)
     p.add_argument("--lr-schedule", help=f"the learning rate over training, one of {list(LR_SCHEDULES)}")
     p.add_argument("--save-every", type=int, help="updates between learning-curve checkpoints (0: none)")
+    p.add_argument("--select-episodes", type=int,
+                   help="score the checkpoint that does best on this many validation episodes of each training "
+                        "variant (0: the last)")
     p.add_argument("--eval-variants", help="variants the largest set's policy is scored on, comma-separated")
     p.add_argument("--eval-episodes", type=int, help="evaluation episodes on the main variant")
     p.add_argument("--other-episodes", type=int, help="evaluation episodes on the other variants")
@@ -98,8 +101,8 @@ def overrides(args: argparse.Namespace) -> dict:
                              "which keeps LeRobot's (cosine)")
         found["policy"] = replace(policy, lr_schedule=args.lr_schedule)
     for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",
-                "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size", "image_shift",
-                "device"):
+                "select_episodes", "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size",
+                "image_shift", "device"):
         if getattr(args, key) is not None:
             found[key] = getattr(args, key)
     return found

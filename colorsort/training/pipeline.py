@@ -3,8 +3,9 @@
 For each demo count of the recipe: collect (``stages.collect``); for each training seed, train
 (``stages.train``) and score the largest set's policies on every evaluation variant and the smaller
 sets' on the main variant; then the learning curve (each earlier checkpoint of the largest set's
-first seed on the main variant's first ``curve_episodes`` seeds; the last checkpoint's point is the
-first episodes of its full score).
+first seed on the main variant's first ``curve_episodes`` seeds; the scored checkpoint's point is the
+first episodes of its full score). The scored checkpoint is the last, or where the recipe says so
+(``select_episodes``) the one that did best on validation seeds (``selection``).
 Finished stages are reused, so the pipeline can be rebuilt over several sittings.
 """
 
@@ -15,7 +16,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from colorsort.training import stages
+from colorsort.training import selection, stages
 from colorsort.training.recipes import Recipe
 from colorsort.training.report import first_episodes, plot_curve, plot_demos, summary_table, table
 from colorsort.training.ship import machine, ship
@@ -66,22 +67,25 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             run_dir, timing = stages.train(recipe, data, steps, seed, out)
             if settings.until == "train":
                 continue
-            last = run_dir / "checkpoints" / "last" / "pretrained_model"
+            model, chosen, validation = choose(recipe, settings, run_dir, timing, steps)
+            at = "" if chosen == steps else f"-at{chosen}"
             scored = []
             for variant in recipe.eval_variants if largest else (recipe.main_variant,):
-                name = f"{run_dir.name}-{recipe.policy.execution}-{variant}"
+                name = f"{run_dir.name}{at}-{recipe.policy.execution}-{variant}"
                 report_path, log = out / "eval" / f"{name}.json", out / "logs" / f"eval-{name}.log"
                 episodes = recipe.episodes_on(variant)
-                report = stages.evaluate(recipe, last, variant, episodes, report_path, settings.envs, log)
+                report = stages.evaluate(recipe, model, variant, episodes, report_path, settings.envs, log)
                 scored.append({"demos_tried": n, "demos": kept, "frames": frames, "seed": seed, "steps": steps,
                                "passes": round(steps * recipe.batch_size / frames, 1),
                                "train_minutes": timing["wall_s"] / 60, **report})
+                if validation:
+                    scored[-1].update(checkpoint=chosen, validation=validation)
                 print(table(scored[-1:], recipe.label).splitlines()[-1], flush=True)
             rows += scored
             if largest and seed == recipe.seeds[0]:
-                shipped = last
+                shipped = model
                 if recipe.save_every:
-                    curve = learning_curve(recipe, settings, run_dir, timing, scored, steps)
+                    curve = learning_curve(recipe, settings, run_dir, timing, scored, chosen)
     if settings.until != "eval":
         print(f"stopped after the {settings.until!r} stage: {out}")
         return {}
@@ -102,14 +106,31 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     return results
 
 
+def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
+           steps: int) -> tuple[Path, int, list[dict]]:
+    """The checkpoint to score: (its pretrained_model, its update, the validation points it was chosen on).
+
+    The last, with no validation, unless the recipe selects (``select_episodes``) among two checkpoints or more."""
+    last = run_dir / "checkpoints" / "last" / "pretrained_model"
+    if not recipe.select_episodes or len(stages.checkpoints(run_dir, timing)) < 2:
+        return last, steps, []
+    points = selection.validate(recipe, run_dir, timing, settings.out, settings.envs)
+    chosen = selection.best(points)["step"]
+    print(f"{run_dir.name}: validation chose update {chosen} ("
+          + ", ".join(f"{p['step']}: {p['successes']}/{p['episodes']}" for p in points) + ")", flush=True)
+    return (last if chosen == steps else selection.model_at(run_dir, chosen)), chosen, points
+
+
 def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
-                   scored: list[dict], steps: int) -> list[dict]:
-    """Success on the main variant's first ``curve_episodes`` seeds at every checkpoint, with its training time."""
+                   scored: list[dict], chosen: int) -> list[dict]:
+    """Success on the main variant's first ``curve_episodes`` seeds at every checkpoint, with its training time.
+
+    The ``chosen`` checkpoint's point is the first episodes of its full score."""
     final = next(r for r in scored if r["variant"] == recipe.main_variant)
     episodes = min(recipe.curve_episodes, final["episodes"])
     points = []
     for step, minutes, model in stages.checkpoints(run_dir, timing):
-        if step == steps:
+        if step == chosen:
             report = final
         else:
             name = f"{run_dir.name}-{recipe.policy.execution}-{step}"

@@ -63,6 +63,9 @@ class Recipe:
             seed's policy is the one shipped and the one whose checkpoints make the learning curve.
         batch_size: samples per update.
         save_every: updates between checkpoints (the learning curve's points); 0: the last only.
+        select_episodes: when above 0, every checkpoint plays this many episodes of each training variant on
+            validation seeds (never the evaluation seeds), and the one that does best there is scored and
+            shipped (``colorsort.training.selection``); 0: the last checkpoint.
         main_variant: the variant of the headline score, the demo curve and the learning curve.
         eval_variants: the variants the largest set's policy is scored on.
         eval_episodes: evaluation episodes on ``main_variant``.
@@ -89,6 +92,7 @@ class Recipe:
     seeds: tuple[int, ...] = (1000,)
     batch_size: int = 64
     save_every: int = 0
+    select_episodes: int = 0
     main_variant: str = "default"
     eval_variants: tuple[str, ...] = IRB140_VARIANTS
     eval_episodes: int = 50
@@ -135,6 +139,12 @@ class Recipe:
             raise ValueError(f"seeds={self.seeds}: give one or more distinct seeds, each 0 or more")
         if self.save_every < 0:
             raise ValueError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
+        if self.select_episodes < 0:
+            raise ValueError(f"select_episodes={self.select_episodes}: give 0 (the last checkpoint) or more")
+        if self.select_episodes and not 0 < self.save_every < self.steps:
+            raise ValueError(f"select_episodes={self.select_episodes} chooses among checkpoints, and save_every="
+                             f"{self.save_every} leaves only the last of {self.steps} updates: give save_every "
+                             "between 1 and steps, or select_episodes=0")
 
     def _check_fit(self) -> None:
         """ValueError when the policy trained on ``train_mix`` could not run on an evaluation variant."""
@@ -235,7 +245,7 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
     # On the CPU, 54 min each: tracking 100/100/12%, tracking-jitter 95/85/20% (seeds 1001/1000/1002)
     Recipe("camera-tracking", policy=TRACKING_ACT, cameras=("sensor", "snapshot", "wrist"), image_size=64,
            batch_size=32, train_mix=(("tracking", 1), ("tracking-jitter", 1)), demos=(48,), boxes_per_episode=5,
-           steps=3600, save_every=1200, seeds=(1001, 1000, 1002), main_variant="tracking",
+           steps=3600, save_every=1200, select_episodes=10, seeds=(1001, 1000, 1002), main_variant="tracking",
            eval_variants=TRACKING_VARIANTS),
     # the camera recipe's demos at 64 px (32 px leaves a 1x1 feature map: no keypoint to place); one
     # observation a prediction and a 2-level U-Net: 0.69 s an update here, 47.1 MB shipped

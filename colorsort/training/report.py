@@ -12,8 +12,19 @@ COLUMNS = ("variant", "policy", "demos", "training", "success rate (95% CI)", "c
 
 
 def updates(r: dict) -> str:
-    """"3600 steps (7.8 passes)": a row's training updates, and the passes over its data they made."""
-    return f"{r['steps']} steps" + (f" ({r['passes']:.1f} passes)" if r.get("passes") is not None else "")
+    """"3600 steps (7.8 passes)": a row's training updates, and the passes over its data they made; with the
+    checkpoint the validation seeds chose, ", scored at 2400 (chosen on validation seeds)"."""
+    return f"{r['steps']} steps" + (f" ({r['passes']:.1f} passes)" if r.get("passes") is not None else "") + (
+        f", scored at {r['checkpoint']} (chosen on validation seeds)" if "checkpoint" in r else "")
+
+
+def seeds_updates(group: list[dict]) -> str:
+    """``updates`` of a row's training seeds: their one run length, and each seed's chosen checkpoint in turn."""
+    text = updates({k: v for k, v in group[0].items() if k != "checkpoint"})
+    if any("checkpoint" in r for r in group):
+        text += ", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in group) + \
+            " (chosen on validation seeds)"
+    return text
 
 
 def row_cells(r: dict, label: str) -> list[str]:
@@ -57,7 +68,7 @@ def summary_table(rows: list[dict], label: str) -> str:
     for g in groups.values():
         rates = [100 * r["success_rate"] for r in g]
         minutes = span([r["train_minutes"] for r in g])
-        cells = [g[0]["variant"], label, str(g[0]["demos"]), f"{updates(g[0])}, {minutes} min",
+        cells = [g[0]["variant"], label, str(g[0]["demos"]), f"{seeds_updates(g)}, {minutes} min",
                  f"{sum(rates) / len(rates):.0f}% ({min(rates):.0f}-{max(rates):.0f}%), {len(g)} seeds",
                  ", ".join(f"{x:.0f}%" for x in rates), str(g[0]["episodes"]),
                  *(str(sum(r[k] for r in g)) for k in ("correct", "misplaced", "dropped"))]
@@ -72,6 +83,23 @@ def first_episodes(report: dict, episodes: int) -> dict:
     return {"episodes": len(kept), "successes": successes, "success_rate": successes / len(kept),
             "success_ci95": list(wilson_interval(successes, len(kept))),
             **{k: sum(e[k] for e in kept) for k in ("correct", "misplaced", "dropped")}}
+
+
+def validation_table(rows: list[dict]) -> str:
+    """A Markdown table: each training seed's checkpoints on the validation seeds, the chosen one marked."""
+    seen: dict[int, dict] = {}
+    for r in rows:
+        if "validation" in r:
+            seen.setdefault(r["seed"], r)
+    lines = ["| seed | update | training [min] | success on validation seeds | by variant | correct | dropped |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for seed, r in seen.items():
+        for p in r["validation"]:
+            mark = " (chosen)" if p["step"] == r["checkpoint"] else ""
+            by = ", ".join(f"{v} {100 * x:.0f}%" for v, x in p["success_by_variant"].items())
+            lines.append(f"| {seed} | {p['step']}{mark} | {p['minutes']:.0f} | {p['successes']}/{p['episodes']} "
+                         f"| {by} | {p['correct']} | {p['dropped']} |")
+    return "\n".join(lines)
 
 
 def curve_table(points: list[dict]) -> str:

@@ -10,8 +10,8 @@ import subprocess
 from pathlib import Path
 
 from colorsort.training.recipes import Recipe
-from colorsort.training.report import curve_table, summary_table, table
-from colorsort.variants import get_variant
+from colorsort.training.report import curve_table, summary_table, table, validation_table
+from colorsort.variants import VALIDATION_SEEDS, get_variant
 
 
 def commit(shipped: Path | None = None) -> str:
@@ -69,6 +69,13 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
         seeds = (f"\nThe same data and updates with each of the recipe's {len(recipe.seeds)} training seeds "
                  f"({', '.join(map(str, recipe.seeds))}; this policy is seed {recipe.seeds[0]}'s):\n\n"
                  f"{summary_table(every_seed, recipe.label)}\n")
+    chosen = ""
+    if any("validation" in r for r in every_seed):
+        chosen = (f"\nThe checkpoint scored (and shipped) is the one of each run that did best on "
+                  f"{recipe.select_episodes} episodes of each training variant on validation seeds "
+                  f"({VALIDATION_SEEDS[0]} on, never scored; `colorsort.training.selection`):\n\n"
+                  f"{validation_table(every_seed)}\n")
+    at = f" (shipped: its checkpoint after {largest[0]['checkpoint']})" if "checkpoint" in largest[0] else ""
     cameras = ",".join(recipe.cameras) or "none"
     task = get_variant(recipe.main_variant).gym_id.removeprefix("colorsort/")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
@@ -79,7 +86,7 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
 Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results['started']}, on
 {machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {boxes}),
 {largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {recipe.batch_size} in
-{largest[0]['train_minutes']:.0f} min of `lerobot-train`. Stages reused from earlier runs of the same command
+{largest[0]['train_minutes']:.0f} min of `lerobot-train`{at}. Stages reused from earlier runs of the same command
 count with the time they took then.
 
 Run it:
@@ -94,6 +101,6 @@ HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task={task} --env.camer
 Scores (`colorsort-eval`, each variant's fixed evaluation seeds; `scores.json` holds them with every episode):
 
 {table(largest, recipe.label)}
-{seeds}{curve}""")
+{seeds}{chosen}{curve}""")
     print(f"shipped {dest} ({size_mb:.1f} MB)")
 

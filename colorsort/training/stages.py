@@ -11,7 +11,10 @@ Layout of the working folder ``out``::
                               under a constant rate, the first S updates of a longer run if there is one
     eval/<run>-<exec>-<variant>.json  colorsort-eval's report of the run's last checkpoint, executing its
                               chunks as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
+    eval/<run>-at<U>-<exec>-<variant>.json  the same of the checkpoint after U updates, when the validation
+                              seeds chose it over the last (``selection``)
     curve/<run>-<exec>-<step>.json    colorsort-eval's report of an earlier checkpoint (the learning curve)
+    select/<run>-<exec>-<step>-<variant>.json  a checkpoint on validation seeds (``selection``)
     logs/                     each command's output
 """
 
@@ -211,13 +214,17 @@ def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
     return found
 
 
-def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, path: Path, envs: int, log: Path) -> dict:
-    """``colorsort-eval`` of ``model`` on ``variant``'s first ``episodes`` evaluation seeds (reused if there)."""
+def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, path: Path, envs: int, log: Path,
+             first_seed: int | None = None) -> dict:
+    """``colorsort-eval`` of ``model`` on ``variant``'s first ``episodes`` evaluation seeds (reused if there);
+    with ``first_seed``, on the seeds from it instead (validation seeds)."""
     if path.is_file():
         print(f"reusing {path}")
         return json.loads(path.read_text())
     cmd = [str(BIN / "colorsort-eval"), "--policy", str(model), "--variant", variant, "--episodes", str(episodes),
            "--envs", str(envs), "--json", str(path)]
+    if first_seed is not None:
+        cmd += ["--seed", str(first_seed)]
     if recipe.episode_length:
         cmd += ["--episode-length", str(recipe.episode_length)]
     run(cmd, log)

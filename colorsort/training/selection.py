@@ -1,0 +1,56 @@
+"""Choosing a training run's checkpoint on validation seeds, never on the seeds it is scored on.
+
+A small policy trained on a CPU can learn a task and lose it in its last updates (``camera-tracking``'s
+seed 1002 sorted every box of 20 tracking episodes at 2,400 updates and 12% at 3,600). Scoring every
+checkpoint on the evaluation seeds and keeping the best would report the best of several draws as one;
+so each checkpoint plays ``select_episodes`` episodes of every training variant on
+``colorsort.variants.VALIDATION_SEEDS`` instead, the one that does best there is scored on the
+evaluation seeds and shipped, and the evaluation seeds decide nothing.
+
+Layout under the pipeline's working folder::
+
+    select/<run>-<exec>-<update>-<variant>.json   colorsort-eval's report of one checkpoint on validation seeds
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from colorsort.training import stages
+from colorsort.training.recipes import Recipe
+from colorsort.variants import VALIDATION_SEEDS
+
+COUNTS = ("episodes", "successes", "correct", "misplaced", "dropped")
+
+
+def validate(recipe: Recipe, run_dir: Path, timing: dict, out: Path, envs: int) -> list[dict]:
+    """Every checkpoint of ``run_dir`` on ``recipe.select_episodes`` validation episodes of each training variant.
+
+    One point per checkpoint: ``{"step", "minutes", "episodes", "successes", "correct", "misplaced", "dropped",
+    "success_by_variant": {variant: rate}}`` (counts summed over the variants;
+    minutes of training when it was saved). Each evaluation is reused when its report is there."""
+    points = []
+    for step, minutes, model in stages.checkpoints(run_dir, timing):
+        point: dict = {"step": step, "minutes": round(minutes, 1), **dict.fromkeys(COUNTS, 0),
+                       "success_by_variant": {}}
+        for variant in recipe.train_variants:
+            name = f"{run_dir.name}-{recipe.policy.execution}-{step}-{variant}"
+            report = stages.evaluate(recipe, model, variant, recipe.select_episodes, out / "select" / f"{name}.json",
+                                     envs, out / "logs" / f"select-{name}.log", first_seed=VALIDATION_SEEDS[0])
+            for key in COUNTS:
+                point[key] += report[key]
+            point["success_by_variant"][variant] = report["success_rate"]
+        points.append(point)
+    return points
+
+
+def best(points: list[dict]) -> dict:
+    """The point with the most successful episodes; ties go to the most boxes sorted right, then the later update."""
+    if not points:
+        raise ValueError("no checkpoints to choose from")
+    return max(points, key=lambda p: (p["successes"], p["correct"], p["step"]))
+
+
+def model_at(run_dir: Path, step: int) -> Path:
+    """The ``pretrained_model`` folder of ``run_dir``'s checkpoint after ``step`` updates."""
+    return run_dir / "checkpoints" / f"{step:06d}" / "pretrained_model"
