@@ -754,3 +754,5 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
     assert f"({first} on, never scored" in readme
     with pytest.raises(ValueError, match="save_every"):
         get_recipe("camera-tracking", save_every=0)
+    with pytest.raises(ValueError, match="validation seeds"):
+        get_recipe("camera-tracking", select_episodes=len(VALIDATION_SEEDS) + 1)

@@ -103,7 +103,7 @@ class Recipe:
 
     def __post_init__(self) -> None:
         from colorsort.cell.cameras import check_cameras
-        from colorsort.variants import get_variant
+        from colorsort.variants import VALIDATION_SEEDS, get_variant
 
         for name in self.train_variants + self.eval_variants + (self.main_variant,):
             get_variant(name)  # ValueError naming the valid variants
@@ -139,12 +139,12 @@ class Recipe:
             raise ValueError(f"seeds={self.seeds}: give one or more distinct seeds, each 0 or more")
         if self.save_every < 0:
             raise ValueError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
-        if self.select_episodes < 0:
-            raise ValueError(f"select_episodes={self.select_episodes}: give 0 (the last checkpoint) or more")
-        if self.select_episodes and not 0 < self.save_every < self.steps:
-            raise ValueError(f"select_episodes={self.select_episodes} chooses among checkpoints, and save_every="
-                             f"{self.save_every} leaves only the last of {self.steps} updates: give save_every "
-                             "between 1 and steps, or select_episodes=0")
+        if not 0 <= self.select_episodes <= len(VALIDATION_SEEDS):
+            raise ValueError(f"select_episodes={self.select_episodes}: give 0 (the last checkpoint) up to "
+                             f"{len(VALIDATION_SEEDS)} (the validation seeds)")
+        if self.select_episodes and not self.save_every:
+            raise ValueError(f"select_episodes={self.select_episodes} chooses among checkpoints, and save_every=0 "
+                             "saves only the last: give save_every, or select_episodes=0")
 
     def _check_fit(self) -> None:
         """ValueError when the policy trained on ``train_mix`` could not run on an evaluation variant."""
