@@ -3,9 +3,9 @@
     python demos/bench_bound.py [--preset tracking-fast] [--seeds 3] [--boxes 20] [--jerk 150]
 
 Prints, per bin and leg, the shortest cycle (``colorsort.expert.bound``: the box met at the best point
-of the reach window) three ways: two bounds (each leg at the datasheet joint speeds, acceleration
-unlimited; then at rest on the box and over the bin, with the expert's acceleration) and a ruckig
-reference (every leg rest to rest, with the expert's acceleration and jerk); then the
+of the reach window) four ways: three bounds (each leg at the datasheet joint speeds, acceleration
+unlimited; then at rest on the box and over the bin, with the expert's acceleration; then with its
+jerk too) and a ruckig reference (every leg rest to rest, with the expert's acceleration and jerk); then the
 expert's measured cycle per phase (the phase times ``colorsort-sort`` reports, on the same preset and seeds,
 sim seconds per box placed) and the ratio of its active cycle (intercept, track, carry, release) to
 each, averaged over the bins (a box's colour, so its bin, is drawn uniformly). An interception that
@@ -59,8 +59,9 @@ def main() -> None:
     m = expert.config.motion
     print(f"IRB140 on '{args.preset}': the shortest cycle per bin [s], the box met at x on the belt; speed: each leg "
           f"at the datasheet joint speeds, acceleration unlimited (a bound); stops: at rest on the box and over the "
-          f"bin, acceleration {m.acceleration:g} rad/s^2, jerk unlimited (a bound); ruckig: every leg rest to rest, "
-          f"jerk {m.jerk:g} rad/s^3 too (a reference)")
+          f"bin, acceleration {m.acceleration:g} rad/s^2, jerk unlimited (a bound); jerk: the same, jerk {m.jerk:g} "
+          f"rad/s^3 too (the bound at the expert's limits); ruckig: every leg rest to rest at the expert's limits "
+          f"(a reference)")
     columns = [(mode, c) for mode in MODES for c in BIN_COLORS]
     print("| leg | " + " | ".join(f"{mode}: {c} (x = {cycles[mode][c].x:.2f} m)" for mode, c in columns) + " |")
     print("| --- |" + " --- |" * len(columns))

@@ -170,10 +170,29 @@ def test_the_wait_in_an_interception_is_its_duration_beyond_the_time_optimal_pla
     assert waiting_time(slow, motion, vmax) == pytest.approx(0.5, abs=1e-6)
 
 
+def test_the_jerk_limited_time_from_rest_is_the_s_curves_by_hand():
+    """From rest at jerk j: d = j t^3 / 6 while the acceleration climbs; past the S-curve to vmax (a/j + vmax/a
+    long, covered at vmax/2 on average) d/vmax + (a/j + vmax/a)/2, which is time_to_stop's d/vmax + vmax/(2a)
+    plus half a jerk ramp; a climb too short to reach a peaks at sqrt(vmax j)."""
+    from colorsort.expert.bound import distance_from_rest, time_from_rest, time_to_stop
+
+    v, a, j = np.array([3.0, 6.0]), 15.0, 150.0
+    assert distance_from_rest(0.05, 3.0, a, j) == pytest.approx(j * 0.05**3 / 6)
+    short = np.array([0.02, 0.001])
+    assert time_from_rest(short, v, a, j) == pytest.approx((6 * short / j) ** (1 / 3), abs=2e-6)
+    far = np.array([2.0, 5.0])
+    assert time_from_rest(far, v, a, j) == pytest.approx(far / v + (a / j + v / a) / 2, abs=2e-6)
+    assert np.all(time_from_rest(far, v, a, j) > time_to_stop(far, v, a))
+    assert time_from_rest(far, v, a, 1e9) == pytest.approx(time_to_stop(far, v, a), abs=2e-6)
+    slow = 1.0  # [rad/s] below a^2 / j = 1.5: the acceleration peaks at sqrt(vmax j) and the climb takes 2 sqrt(v/j)
+    assert distance_from_rest(10.0, slow, a, j) == pytest.approx(slow * (10.0 - np.sqrt(slow / j)))
+
+
 def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_env):
     """A box standing at x = 0.45 m, the red bin: each leg of the bound is the largest joint move over its
-    datasheet speed, each leg of the ruckig reference is ruckig's own plan (never shorter), and the expert's
-    measured cycle on tracking-fast is no shorter than the bound of any bin."""
+    datasheet speed, each leg of the ruckig reference is ruckig's own plan (never shorter), the bounds with
+    acceleration and then jerk lie between, and the expert's measured cycle on tracking-fast is no shorter than
+    the tightest bound (jerk) of any bin."""
     from colorsort.config import BIN_COLORS
     from colorsort.expert.bound import LEGS, cycle_at, shortest_cycle
     from colorsort.expert.planning import Waypoint, plan_motion
@@ -185,15 +204,16 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
     top = L.belt_top_z + L.box_size
     q_over = expert.ik.solve(Waypoint("over", (0.45, L.belt_y, top + cfg.approach_gap), expert.cup_yaw), expert.q_wait)
     q_on = expert.ik.solve(Waypoint("on", (0.45, L.belt_y, top - cfg.press), expert.cup_yaw), q_over)
-    bound, stops, reference = (cycle_at(expert, 0.45, "red", mode) for mode in ("speed", "stops", "ruckig"))
+    bound, stops, jerk, reference = (cycle_at(expert, 0.45, "red", mode)
+                                     for mode in ("speed", "stops", "jerk", "ruckig"))
     assert bound.legs["down onto the box"] == pytest.approx(np.max(np.abs(q_on - q_over) / vmax))
     assert reference.legs["down onto the box"] == pytest.approx(plan_motion(q_over, q_on, vmax, cfg.motion).duration)
     assert bound.legs["seal"] == bound.legs["release"] == expert.dt
     a = cfg.motion.acceleration  # from rest, 0.04 m down is a short move: no joint reaches its top speed
     assert stops.legs["down onto the box"] == pytest.approx(np.max(np.sqrt(2 * np.abs(q_on - q_over) / a)))
-    assert all(reference.legs[leg] >= stops.legs[leg] >= bound.legs[leg] for leg in LEGS)
+    assert all(reference.legs[leg] >= jerk.legs[leg] >= stops.legs[leg] >= bound.legs[leg] for leg in LEGS)
     assert bound.total == pytest.approx(sum(bound.legs.values()))
-    fastest = min(shortest_cycle(expert, c, "stops").total for c in BIN_COLORS)
+    fastest = min(shortest_cycle(expert, c, "jerk").total for c in BIN_COLORS)
 
     expert.reset(obs)
     active = 0

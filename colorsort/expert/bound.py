@@ -12,6 +12,9 @@ same ``x``. Each motion leg takes, between its two joint configurations (mink IK
   the bin at the release, and moves freely through the other two points: each leg is the least time
   to start from or come to rest there, per joint, at the datasheet speeds and the expert's
   acceleration (``time_to_stop``), jerk unlimited. A motion that stops where it stops can do no better.
+- ``jerk`` (the bound at the expert's own limits): ``stops`` with the jerk limited too, at the expert's
+  jerk (``time_from_rest``): the tightest of the three bounds, and the one that prices what the
+  expert's jerk costs on the short legs (down onto the box, the lift).
 - ``ruckig`` (a reference): a time-optimal ruckig motion from rest to rest at the datasheet speeds
   and the expert's acceleration and jerk. An expert that blends legs (it meets a moving box already
   moving and carries from the moving state) can beat it.
@@ -29,7 +32,7 @@ from colorsort.expert.planning import JointTrajectory, MotionConfig, Waypoint, p
 from colorsort.expert.tracking import TrackingExpert
 
 LEGS = ("down onto the box", "seal", "lift", "carry to the bin", "release", "back over the next box")
-MODES = ("speed", "stops", "ruckig")
+MODES = ("speed", "stops", "jerk", "ruckig")
 
 
 def time_to_stop(d: np.ndarray, vmax: np.ndarray, a: float) -> np.ndarray:
@@ -38,6 +41,38 @@ def time_to_stop(d: np.ndarray, vmax: np.ndarray, a: float) -> np.ndarray:
     d = np.abs(d)
     cruise = d >= vmax**2 / (2 * a)
     return np.where(cruise, d / vmax + vmax / (2 * a), np.sqrt(2 * d / a))
+
+
+def distance_from_rest(t: float, vmax: float, a: float, j: float) -> float:
+    """[rad] the farthest one joint gets in ``t`` [s] from rest (no speed, no acceleration) at speeds up to
+    ``vmax`` [rad/s], accelerations up to ``a`` [rad/s^2] and jerk up to ``j`` [rad/s^3]: acceleration
+    raised at full jerk, held, then lowered at full jerk so that the speed levels off at ``vmax``."""
+    peak = min(a, float(np.sqrt(vmax * j)))  # a short climb to vmax never reaches the acceleration limit
+    ramp, hold = peak / j, max(vmax - peak**2 / j, 0.0) / peak  # [s] each jerk phase, the constant-acceleration one
+    if t <= ramp:
+        return j * t**3 / 6
+    p, v = j * ramp**3 / 6, j * ramp**2 / 2
+    if t <= ramp + hold:
+        return p + v * (t - ramp) + peak * (t - ramp) ** 2 / 2
+    p, v = p + v * hold + peak * hold**2 / 2, v + peak * hold
+    tau = min(t - ramp - hold, ramp)
+    p += v * tau + peak * tau**2 / 2 - j * tau**3 / 6
+    return p + vmax * max(t - 2 * ramp - hold, 0.0)
+
+
+def time_from_rest(d: np.ndarray, vmax: np.ndarray, a: float, j: float) -> np.ndarray:
+    """[s] per joint: ``time_to_stop`` with the jerk limited to ``j`` [rad/s^3] too (from rest, or to rest:
+    the same by time reversal), the inverse of ``distance_from_rest`` to 1 microsecond."""
+    times = []
+    for dist, v in zip(np.abs(d), vmax, strict=True):
+        lo, hi = 0.0, 1.0
+        while distance_from_rest(hi, v, a, j) < dist:
+            hi *= 2
+        while hi - lo > 1e-6:
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if distance_from_rest(mid, v, a, j) < dist else (lo, mid)
+        times.append(hi)
+    return np.asarray(times)
 
 
 @dataclass(frozen=True)
@@ -73,8 +108,11 @@ def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") 
     def move(a: np.ndarray, b: np.ndarray) -> float:
         if mode == "speed":
             return float(np.max(np.abs(b - a) / vmax))
+        limit = vmax * cfg.motion.speed_factor
         if mode == "stops":
-            return float(np.max(time_to_stop(b - a, vmax * cfg.motion.speed_factor, cfg.motion.acceleration)))
+            return float(np.max(time_to_stop(b - a, limit, cfg.motion.acceleration)))
+        if mode == "jerk":
+            return float(np.max(time_from_rest(b - a, limit, cfg.motion.acceleration, cfg.motion.jerk)))
         return plan_motion(a, b, vmax, cfg.motion).duration
 
     legs = dict(zip(LEGS, (move(q_over, q_on), expert.dt, move(q_on, q_lift), move(q_lift, q_drop), expert.dt,
