@@ -132,6 +132,31 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
 
 
 @pytest.mark.slow
+def test_the_tracking_recipe_runs_in_small_and_scores_the_checkpoint_its_validation_seeds_chose(tmp_path):
+    """The state-tracking recipe, tiny: its policy takes the tracking belt's 24 state inputs (the encoder too), both
+    checkpoints play the validation seeds (never the evaluation seeds), and the chosen one is scored on the
+    tracking variants."""
+    out = tmp_path / "tracking"
+    result = run(baseline("--recipe", "state-tracking", "--demos", "1", "--train-variants", "tracking",
+                          "--boxes-per-episode", "1", "--steps", "2", "--save-every", "1", "--select-episodes", "1",
+                          "--batch-size", "2", "--eval-variants", "tracking,tracking-fast", "--eval-episodes", "1",
+                          "--other-episodes", "1", "--curve-episodes", "1", "--episode-length", "5", "--workers", "1",
+                          "--envs", "1", "--out", str(out)), tmp_path, timeout=900)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    run_dir = out / "train" / "demos-1-2steps-seed1000"
+    config = json.loads((run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text())
+    assert config["input_features"]["observation.state"]["shape"] == [24]
+    from colorsort.variants import VALIDATION_SEEDS
+
+    chose = sorted(p.name for p in (out / "select").glob("*.json"))
+    assert chose == ["demos-1-2steps-seed1000-ens0.2-1-tracking.json", "demos-1-2steps-seed1000-ens0.2-2-tracking.json"]
+    assert all(json.loads((out / "select" / name).read_text())["seeds"] == [VALIDATION_SEEDS[0]] for name in chose)
+    results = json.loads((out / "results.json").read_text())
+    assert [(r["variant"], r["checkpoint"]) for r in results["rows"]] == [("tracking", 2), ("tracking-fast", 2)]
+    assert "scored at 2 (chosen on validation seeds)" in result.stdout
+
+
+@pytest.mark.slow
 def test_the_diffusion_camera_recipe_runs_in_small(tmp_path):
     """camera-diffusion, tiny: lerobot-train's diffusion policy with its GroupNorm ResNet, spatial-softmax keypoints
     and crops; it reads the images and the arm's state only, and colorsort-eval runs it on the cameras it knows."""
