@@ -112,13 +112,14 @@ def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
 
     The last, with no validation, unless the recipe selects (``select_episodes``) among two checkpoints or more."""
     last = run_dir / "checkpoints" / "last" / "pretrained_model"
-    if not recipe.select_episodes or len(stages.checkpoints(run_dir, timing)) < 2:
+    found = stages.checkpoints(run_dir, timing)
+    if not recipe.select_episodes or len(found) < 2:
         return last, steps, []
-    points = selection.validate(recipe, run_dir, timing, settings.out, settings.envs)
+    points = selection.validate(recipe, run_dir.name, found, settings.out, settings.envs)
     chosen = selection.best(points)["step"]
     print(f"{run_dir.name}: validation chose update {chosen} ("
           + ", ".join(f"{p['step']}: {p['successes']}/{p['episodes']}" for p in points) + ")", flush=True)
-    return (last if chosen == steps else selection.model_at(run_dir, chosen)), chosen, points
+    return (last if chosen == steps else next(m for step, _, m in found if step == chosen)), chosen, points
 
 
 def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,

@@ -23,18 +23,20 @@ from colorsort.variants import VALIDATION_SEEDS
 COUNTS = ("episodes", "successes", "correct", "misplaced", "dropped")
 
 
-def validate(recipe: Recipe, run_dir: Path, timing: dict, out: Path, envs: int) -> list[dict]:
-    """Every checkpoint of ``run_dir`` on ``recipe.select_episodes`` validation episodes of each training variant.
+def validate(recipe: Recipe, run: str, checkpoints: list[tuple[int, float, Path]], out: Path,
+             envs: int) -> list[dict]:
+    """Every checkpoint of the training run ``run`` (``stages.checkpoints``: update, minutes, pretrained_model) on
+    ``recipe.select_episodes`` validation episodes of each training variant.
 
     One point per checkpoint: ``{"step", "minutes", "episodes", "successes", "correct", "misplaced", "dropped",
     "success_by_variant": {variant: rate}}`` (counts summed over the variants;
     minutes of training when it was saved). Each evaluation is reused when its report is there."""
     points = []
-    for step, minutes, model in stages.checkpoints(run_dir, timing):
+    for step, minutes, model in checkpoints:
         point: dict = {"step": step, "minutes": round(minutes, 1), **dict.fromkeys(COUNTS, 0),
                        "success_by_variant": {}}
         for variant in recipe.train_variants:
-            name = f"{run_dir.name}-{recipe.policy.execution}-{step}-{variant}"
+            name = f"{run}-{recipe.policy.execution}-{step}-{variant}"
             report = stages.evaluate(recipe, model, variant, recipe.select_episodes, out / "select" / f"{name}.json",
                                      envs, out / "logs" / f"select-{name}.log", first_seed=VALIDATION_SEEDS[0])
             for key in COUNTS:
@@ -49,8 +51,3 @@ def best(points: list[dict]) -> dict:
     if not points:
         raise ValueError("no checkpoints to choose from")
     return max(points, key=lambda p: (p["successes"], p["correct"], p["step"]))
-
-
-def model_at(run_dir: Path, step: int) -> Path:
-    """The ``pretrained_model`` folder of ``run_dir``'s checkpoint after ``step`` updates."""
-    return run_dir / "checkpoints" / f"{step:06d}" / "pretrained_model"
