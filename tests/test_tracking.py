@@ -194,7 +194,7 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
     acceleration and then jerk lie between, and the expert's measured cycle on tracking-fast is no shorter than
     the tightest bound (jerk) of any bin."""
     from colorsort.config import BIN_COLORS
-    from colorsort.expert.bound import LEGS, cycle_at, shortest_cycle
+    from colorsort.expert.bound import LEGS, commanded_peaks, cycle_at, shortest_cycle
     from colorsort.expert.planning import Waypoint, plan_motion
 
     env = make_env(preset="tracking-fast", has_offscreen_renderer=True, seed=0)
@@ -216,8 +216,27 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
     fastest = min(shortest_cycle(expert, c, "jerk").total for c in BIN_COLORS)
 
     expert.reset(obs)
-    active = 0
+    active, references, phases = 0, [], []
     while len(env.events) < 10:
         active += expert.phase.value in ("intercept box", "track box", "move over bin", "release")
-        obs, *_ = env.step(expert.act(obs))
+        action = expert.act(obs)
+        references.append(expert.motion.sample(expert.time)[0])
+        phases.append(expert.phase.value)
+        obs, *_ = env.step(action)
     assert active * env.control_timestep / 10 >= fastest
+    peaks = commanded_peaks(np.array(references), phases, env.control_timestep)
+    for phase in ("move over bin", "move to wait pose"):  # ruckig's legs, sampled, keep to its limits
+        assert peaks[phase][0] <= cfg.motion.acceleration * (1 + 1e-6)
+        assert peaks[phase][1] <= cfg.motion.jerk * (1 + 1e-6)
+
+
+def test_commanded_peaks_are_the_reference_finite_differences_per_phase():
+    """q = j t^3 / 6 sampled every 50 ms: the acceleration is j t at each middle row, the jerk j throughout."""
+    from colorsort.expert.bound import commanded_peaks
+
+    dt, j = 0.05, 60.0
+    t = dt * np.arange(10)
+    q = np.stack([j * t**3 / 6, -j * t**3 / 12], axis=1)  # the larger joint counts
+    peaks = commanded_peaks(q, ["a"] * 5 + ["b"] * 5, dt)
+    assert peaks["a"] == pytest.approx([j * t[4], j])  # middle rows 1..4 are phase a
+    assert peaks["b"] == pytest.approx([j * t[8], j])

@@ -12,9 +12,11 @@ same ``x``. Each motion leg takes, between its two joint configurations (mink IK
   the bin at the release, and moves freely through the other two points: each leg is the least time
   to start from or come to rest there, per joint, at the datasheet speeds and the expert's
   acceleration (``time_to_stop``), jerk unlimited. A motion that stops where it stops can do no better.
-- ``jerk`` (the bound at the expert's own limits): ``stops`` with the jerk limited too, at the expert's
-  jerk (``time_from_rest``): the tightest of the three bounds, and the one that prices what the
-  expert's jerk costs on the short legs (down onto the box, the lift).
+- ``jerk`` (the bound at the expert's planner's limits): ``stops`` with the jerk limited too, at the
+  expert's jerk (``time_from_rest``): the tightest of the three bounds, and the one that prices what
+  the expert's jerk costs on the short legs (down onto the box, the lift). The tracking expert follows
+  the box down and up along a dense path its planner does not time, so it may command more there
+  (``commanded_peaks`` measures what it commands, phase by phase).
 - ``ruckig`` (a reference): a time-optimal ruckig motion from rest to rest at the datasheet speeds
   and the expert's acceleration and jerk. An expert that blends legs (it meets a moving box already
   moving and carries from the moving state) can beat it.
@@ -125,6 +127,20 @@ def shortest_cycle(expert: TrackingExpert, color: str, mode: str = "speed", step
     lo, hi = expert.window
     return min((cycle_at(expert, float(x), color, mode) for x in np.arange(lo, hi + 1e-9, step)),
                key=lambda c: c.total)
+
+
+def commanded_peaks(q: np.ndarray, phases: list[str], dt: float) -> dict[str, np.ndarray]:
+    """Per phase, the largest joint acceleration [rad/s^2] and jerk [rad/s^3] an expert commanded, as its
+    controller sees them: finite differences of the reference ``q`` (K, n), one row per control period ``dt``
+    [s], ``phases`` (K,) the phase of each row. A second difference counts for its middle row's phase, a third
+    for its second row's."""
+    acceleration = np.abs(np.diff(q, 2, axis=0)).max(axis=1) / dt**2  # row k + 1
+    jerk = np.abs(np.diff(q, 3, axis=0)).max(axis=1) / dt**3  # rows k + 1 and k + 2
+    out: dict[str, np.ndarray] = {}
+    for k, phase in enumerate(phases[1:-1]):
+        peak = np.array([acceleration[k], jerk[k] if k < len(jerk) else 0.0])
+        out[phase] = np.maximum(out.get(phase, peak), peak)
+    return out
 
 
 def waiting_time(approach: JointTrajectory, motion: MotionConfig, max_velocity: np.ndarray) -> float:
