@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -153,7 +154,7 @@ def test_the_tracking_recipe_runs_in_small_and_scores_the_checkpoint_its_validat
     assert all(json.loads((out / "select" / name).read_text())["seeds"] == [VALIDATION_SEEDS[0]] for name in chose)
     results = json.loads((out / "results.json").read_text())
     assert [(r["variant"], r["checkpoint"]) for r in results["rows"]] == [("tracking", 2), ("tracking-fast", 2)]
-    assert "scored at 2 (chosen on validation seeds)" in result.stdout
+    assert re.search(r"scored at 2 after \d+ min \(chosen on validation seeds\)", result.stdout)
 
 
 @pytest.mark.slow
@@ -775,7 +776,7 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
     assert [(p["step"], p["successes"]) for p in results["curve"]] == [(1, 1), (2, 2), (3, 3)]
     assert (ship_to / "model.safetensors").read_text() == "weights after 2"
     readme = (ship_to / "README.md").read_text()
-    assert "scored at 2/3 (chosen on validation seeds)" in readme and "| 1000 | 2 (chosen) |" in readme
+    assert "scored at 2/3 after 2/3 min (chosen on validation seeds)" in readme and "| 1000 | 2 (chosen) |" in readme
     assert f"({first} on, never scored" in readme
     with pytest.raises(ValueError, match="save_every"):
         get_recipe("camera-tracking", save_every=0)

@@ -232,10 +232,12 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
     # the camera recipe with the sensor's triggered photo in place of its live view: the colour stays in
     # view over the carry (ACT reads one frame). The far (blue) bin is the last motion learnt: seed 1000 at
     # 2,000 updates and seed 1001 at 1,000-4,000 carried every blue box past it; both placed them at 6,000,
-    # where seed 1002 still put every red box in the green bin (default 32%)
+    # where seed 1002 still put every red box in the green bin (default 32%). Each run's checkpoint is chosen
+    # on validation seeds (10 episodes of each training variant), as camera-tracking's
     Recipe("camera-snapshot", cameras=("snapshot", "wrist"), image_size=32, batch_size=32,
            train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),
-           demos=(48,), late_pass=100, steps=6000, save_every=2000, seeds=(1000, 1001, 1002), image_shift=0.1),
+           demos=(48,), late_pass=100, steps=6000, save_every=2000, select_episodes=10, seeds=(1000, 1001, 1002),
+           image_shift=0.1),
     # the live sensor times the dip, the held photo keeps the colour over the carry: sensor+wrist put 17
     # boxes of 50 tracking episodes in a wrong bin, sensor+snapshot+wrist none in 120 episodes of three seeds
     # trained on a GPU (0.88 s an update here). 3600 updates: a sensor+wrist run trained on to 4500 fell from

@@ -11,19 +11,27 @@ COLUMNS = ("variant", "policy", "demos", "training", "success rate (95% CI)", "c
            "distractors let through", "boxes/min", "mean cycle [s]")
 
 
+def chosen_minutes(r: dict) -> float:
+    """[min] of training when a row's chosen checkpoint was saved (its validation point's)."""
+    return next(p["minutes"] for p in r["validation"] if p["step"] == r["checkpoint"])
+
+
 def updates(r: dict) -> str:
     """"3600 steps (7.8 passes)": a row's training updates, and the passes over its data they made; with the
-    checkpoint the validation seeds chose, ", scored at 2400 (chosen on validation seeds)"."""
+    checkpoint the validation seeds chose, ", scored at 2400 after 36 min (chosen on validation seeds)"."""
     return f"{r['steps']} steps" + (f" ({r['passes']:.1f} passes)" if r.get("passes") is not None else "") + (
-        f", scored at {r['checkpoint']} (chosen on validation seeds)" if "checkpoint" in r else "")
+        f", scored at {r['checkpoint']} after {chosen_minutes(r):.0f} min (chosen on validation seeds)"
+        if "checkpoint" in r else "")
 
 
 def seeds_updates(group: list[dict]) -> str:
-    """``updates`` of a row's training seeds: their one run length, and each seed's chosen checkpoint in turn."""
+    """``updates`` of a row's training seeds: their one run length, and each seed's chosen checkpoint in turn
+    with the minutes of training it took."""
     text = updates({k: v for k, v in group[0].items() if k != "checkpoint"})
     if any("checkpoint" in r for r in group):
-        text += ", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in group) + \
-            " (chosen on validation seeds)"
+        text += ", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in group) + " after " + \
+            "/".join(f"{chosen_minutes(r):.0f}" if "checkpoint" in r else f"{r['train_minutes']:.0f}"
+                     for r in group) + " min (chosen on validation seeds)"
     return text
 
 
