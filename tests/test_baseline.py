@@ -509,10 +509,17 @@ def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_p
                                   for v in ("default", "fast")])):
         (tmp_path / name).mkdir()
         (tmp_path / name / "scores.json").write_text(json.dumps({"rows": rows, "recipe": {"cameras": []}}))
-    one, three = headline(tmp_path).splitlines()[2:]
+    chosen = [{**row("default", s, 1.0), "checkpoint": c,
+               "validation": [{"step": 2500, "minutes": 10.0}, {"step": 5000, "minutes": 20.0}]}
+              for s, c in ((1000, 5000), (1001, 2500))]
+    (tmp_path / "two").mkdir()
+    (tmp_path / "two" / "scores.json").write_text(json.dumps({"rows": chosen, "recipe": {"cameras": []}}))
+    one, three, two = headline(tmp_path).splitlines()[2:]
     assert "`default` 90% (80-95%, 50)" in one and "20 min on the CPU |" in one
     assert "`default` mean 75%, seeds 60-90% (3 x 50); `fast` mean 75%" in three
     assert "per seed, 3 seeds" in three and three.count("`default`") == 1
+    # each run scored at the checkpoint its validation seeds chose: the training time is that checkpoint's
+    assert "5000 updates, scored at 5000/2500 (chosen on validation seeds), 10-20 min on the CPU per seed" in two
 
 
 @pytest.mark.parametrize("variant", ["robots-panda", "tracking"])

@@ -24,7 +24,7 @@ import re
 from collections import Counter
 from pathlib import Path
 
-from colorsort.training.report import curve_table, span, summary_table
+from colorsort.training.report import chosen_minutes, curve_table, span, summary_table
 
 KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
@@ -89,11 +89,12 @@ def headline(folder: Path) -> str:
         by_variant = largest_by_variant(scores["rows"])
         largest = [r for group in by_variant.values() for r in group]
         cells = [variant_cell(v, g) for v, g in by_variant.items()]
-        first = largest[0]
-        minutes = [r["train_minutes"] for r in largest]
-        seeds = len(next(iter(by_variant.values())))
-        training = (f"{first['demos']} demos, {first['steps']} updates, {span(minutes)} min on the CPU"
-                    + (f" per seed, {seeds} seeds" if seeds > 1 else ""))
+        first, runs = largest[0], next(iter(by_variant.values()))
+        minutes = [chosen_minutes(r) if "checkpoint" in r else r["train_minutes"] for r in runs]
+        chosen = (", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in runs)
+                  + " (chosen on validation seeds)") if any("checkpoint" in r for r in runs) else ""
+        training = (f"{first['demos']} demos, {first['steps']} updates{chosen}, {span(minutes)} min on the CPU"
+                    + (f" per seed, {len(runs)} seeds" if len(runs) > 1 else ""))
         name = path.parent.name
         policy, _, inputs = label(scores).partition(", ")
         lines.append(f"| [`{name}`]({folder.name}/{name}/README.md) | {policy} | {inputs} | "
