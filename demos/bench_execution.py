@@ -3,13 +3,16 @@
     python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking \
         [--executions chunk10,ens0.01] [--episodes 20] [--envs 2]
     python demos/bench_execution.py --policy baselines/act-camera --variant jitter,seed
+    python demos/bench_execution.py --policy baselines/act-camera-snapshot --variant jitter --validation
 
 ACT predicts a chunk of actions per inference. ``chunkN`` executes the first N of each chunk
 open-loop (LeRobot's default is 10 of 20); ``ensC`` predicts every step and executes the average of
 every chunk's prediction for that step, weights exp(-C * age) (ACT's temporal ensembling). Neither
 setting changes the trained weights, so each execution is the same checkpoint with its
 ``config.json`` rewritten in a temporary copy, scored by ``colorsort.benchmark.evaluate`` on the
-variant's first ``--episodes`` evaluation seeds. ``--variant`` takes several, comma-separated. Prints
+variant's first ``--episodes`` evaluation seeds, or with ``--validation`` on the validation seeds
+(``colorsort.variants.VALIDATION_SEEDS``, which no evaluation scores: an execution chosen there is
+not chosen on the seeds it is then scored on). ``--variant`` takes several, comma-separated. Prints
 one row per variant and execution: success with its 95% Wilson interval and the box outcomes.
 """
 
@@ -28,7 +31,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 from colorsort.benchmark.evaluate import evaluate, observation_settings  # noqa: E402
 from colorsort.logs import quiet_robosuite_info  # noqa: E402
 from colorsort.results import recorded  # noqa: E402
-from colorsort.variants import get_variant  # noqa: E402
+from colorsort.variants import VALIDATION_SEEDS, get_variant  # noqa: E402
 
 
 def inference_settings(execution: str) -> dict[str, float | int | None]:
@@ -56,6 +59,8 @@ def main() -> None:
     p.add_argument("--executions", default="chunk10,ens0.01", help="comma-separated chunkN or ensC")
     p.add_argument("--episodes", type=int, default=20)
     p.add_argument("--envs", type=int, default=2)
+    p.add_argument("--validation", action="store_true",
+                   help="play the validation seeds (20000 on) instead of the evaluation seeds")
     args = p.parse_args()
     quiet_robosuite_info()
     executions = args.executions.split(",")
@@ -65,7 +70,8 @@ def main() -> None:
     for variant in variants:
         get_variant(variant)  # ValueError naming the valid variants before any episode runs
     cameras, size = observation_settings(args.policy, None, None)
-    print(f"{args.policy} on {', '.join(repr(v) for v in variants)}, first {args.episodes} evaluation seeds of each")
+    seeds = "validation seeds" if args.validation else "evaluation seeds of each"
+    print(f"{args.policy} on {', '.join(repr(v) for v in variants)}, first {args.episodes} {seeds}")
     print("| variant | execution | success rate (95% CI) | correct | misplaced | dropped | distractors let through |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as tmp:
@@ -73,7 +79,7 @@ def main() -> None:
         for variant in variants:
             for execution, policy in policies.items():
                 r = evaluate(str(policy), variant, args.episodes, image_size=size, cameras=cameras,
-                             progress=False, envs=args.envs)
+                             progress=False, envs=args.envs, seed=VALIDATION_SEEDS[0] if args.validation else None)
                 lo, hi = r.success_ci95
                 print(f"| {variant} | {execution} | {100 * r.success_rate:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%) "
                       f"| {r.correct} | {r.misplaced} | {r.dropped} | {r.distractors_let_through}/{r.distractors} |",
