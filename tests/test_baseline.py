@@ -582,6 +582,35 @@ def test_bench_execution_scores_one_checkpoint_under_each_execution(tmp_path):
         bench.inference_settings("open10")
 
 
+def test_bench_execution_compares_on_validation_seeds_when_asked(monkeypatch, capsys):
+    """``--validation`` plays the validation seeds (from 20000), never the evaluation seeds; without it, the
+    evaluation seeds (no first seed given)."""
+    import importlib.util
+    from types import SimpleNamespace
+
+    from colorsort.variants import VALIDATION_SEEDS
+
+    spec = importlib.util.spec_from_file_location("bench_execution", REPO / "demos" / "bench_execution.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    seeds = []
+
+    def fake_evaluate(policy, variant, episodes, **kwargs):
+        seeds.append(kwargs["seed"])
+        return SimpleNamespace(success_ci95=(0.0, 1.0), success_rate=1.0, correct=3, misplaced=0, dropped=0,
+                               distractors_let_through=0, distractors=0)
+
+    monkeypatch.setattr(bench, "evaluate", fake_evaluate)
+    command = ["bench_execution.py", "--policy", str(SHIPPED["act-state"]), "--variant", "jitter", "--executions",
+               "chunk10,ens0.2", "--episodes", "2"]
+    for extra, first in (([], None), (["--validation"], VALIDATION_SEEDS[0])):
+        seeds.clear()
+        monkeypatch.setattr(sys, "argv", command + extra)
+        bench.main()
+        assert seeds == [first, first]
+    assert "first 2 validation seeds" in capsys.readouterr().out
+
+
 @pytest.mark.slow
 def test_bench_execution_scores_each_variant_named_and_refuses_an_unknown_one_first(tmp_path):
     """``--variant default,distractors`` gives one row per variant and execution, each scored on that variant (only
