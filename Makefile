@@ -81,6 +81,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter --executions chunk20,chunk10,chunk5 --episodes 20
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter,seed,default,fast,lighting,distractors --executions chunk10,ens0.01 --episodes 20
 	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter --executions ens-0.1,ens0.1 --episodes 20
+	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-snapshot --variant jitter --executions chunk10,ens0.2 --episodes 10 --validation
 
 # a learned baseline: demos, lerobot-train, colorsort-eval, learning curve (`make baseline RECIPE=camera-tracking`;
 # `colorsort-baseline --list` names the recipes); about 1.5 h a recipe on 2 CPU cores
