@@ -11,8 +11,11 @@ COLUMNS = ("variant", "policy", "demos", "training", "success rate (95% CI)", "c
            "distractors let through", "boxes/min", "mean cycle [s]")
 
 
-def chosen_minutes(r: dict) -> float:
-    """[min] of training when a row's chosen checkpoint was saved (its validation point's)."""
+def scored_minutes(r: dict) -> float:
+    """[min] of training behind the checkpoint a row scored: when the chosen one was saved (its validation
+    point's), else the whole run."""
+    if "checkpoint" not in r:
+        return r["train_minutes"]
     return next(p["minutes"] for p in r["validation"] if p["step"] == r["checkpoint"])
 
 
@@ -20,7 +23,7 @@ def updates(r: dict) -> str:
     """"3600 steps (7.8 passes)": a row's training updates, and the passes over its data they made; with the
     checkpoint the validation seeds chose, ", scored at 2400 after 36 min (chosen on validation seeds)"."""
     return f"{r['steps']} steps" + (f" ({r['passes']:.1f} passes)" if r.get("passes") is not None else "") + (
-        f", scored at {r['checkpoint']} after {chosen_minutes(r):.0f} min (chosen on validation seeds)"
+        f", scored at {r['checkpoint']} after {scored_minutes(r):.0f} min (chosen on validation seeds)"
         if "checkpoint" in r else "")
 
 
@@ -30,8 +33,7 @@ def seeds_updates(group: list[dict]) -> str:
     text = updates({k: v for k, v in group[0].items() if k != "checkpoint"})
     if any("checkpoint" in r for r in group):
         text += ", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in group) + " after " + \
-            "/".join(f"{chosen_minutes(r):.0f}" if "checkpoint" in r else f"{r['train_minutes']:.0f}"
-                     for r in group) + " min (chosen on validation seeds)"
+            "/".join(f"{scored_minutes(r):.0f}" for r in group) + " min (chosen on validation seeds)"
     return text
 
 

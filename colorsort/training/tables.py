@@ -24,7 +24,7 @@ import re
 from collections import Counter
 from pathlib import Path
 
-from colorsort.training.report import chosen_minutes, curve_table, span, summary_table
+from colorsort.training.report import curve_table, scored_minutes, span, summary_table
 
 KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
@@ -90,7 +90,7 @@ def headline(folder: Path) -> str:
         largest = [r for group in by_variant.values() for r in group]
         cells = [variant_cell(v, g) for v, g in by_variant.items()]
         first, runs = largest[0], next(iter(by_variant.values()))
-        minutes = [chosen_minutes(r) if "checkpoint" in r else r["train_minutes"] for r in runs]
+        minutes = [scored_minutes(r) for r in runs]
         chosen = (", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in runs)
                   + " (chosen on validation seeds)") if any("checkpoint" in r for r in runs) else ""
         training = (f"{first['demos']} demos, {first['steps']} updates{chosen}, {span(minutes)} min on the CPU"
