@@ -1,6 +1,7 @@
 """The tracking expert's cycle against the physical bound: the arm's joint speeds and the cell's geometry.
 
     python demos/bench_bound.py [--preset tracking-fast] [--seeds 10] [--boxes 20] [--jerk 150] [--acceleration 15]
+        [--descend 0.1] [--lift 0.08]
 
 Prints, per bin and leg, the shortest cycle (``colorsort.expert.bound``: the box met at the best point
 of the reach window) four ways: three bounds (each leg at the datasheet joint speeds, acceleration
@@ -52,9 +53,13 @@ def main() -> None:
                         "ruckig reference")
     p.add_argument("--acceleration", type=float, default=TRACKING_EXPERT.motion.acceleration,
                    help="the expert's joint acceleration limit [rad/s^2] (its preset's by default), as --jerk")
+    p.add_argument("--descend", type=float, default=TRACKING_EXPERT.track_descend_time,
+                   help="the expert's time down onto the moving box [s] (its preset's by default)")
+    p.add_argument("--lift", type=float, default=TRACKING_EXPERT.track_lift_time,
+                   help="the expert's time lifting the box off the moving belt [s] (its preset's by default)")
     args = p.parse_args()
-    config = replace(TRACKING_EXPERT, motion=replace(TRACKING_EXPERT.motion, acceleration=args.acceleration,
-                                                     jerk=args.jerk))
+    config = replace(TRACKING_EXPERT, track_descend_time=args.descend, track_lift_time=args.lift,
+                     motion=replace(TRACKING_EXPERT.motion, acceleration=args.acceleration, jerk=args.jerk))
 
     env = ColorSort(robots="IRB140", preset=args.preset, has_offscreen_renderer=True, use_camera_obs=False,
                     ignore_done=True, seed=0)
