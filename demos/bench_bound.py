@@ -193,7 +193,7 @@ def run_expert(config: ExpertConfig, preset: str, seed: int, boxes: int | None =
         references.append(expert.motion.sample(expert.time)[0])  # the reference this action was led from
         phases.append(phase.value)
         if phase is TrackingPhase.INTERCEPT and before is not TrackingPhase.INTERCEPT:
-            assert expert.motion is not None and isinstance(expert.motion.trajectory, JointTrajectory)
+            assert isinstance(expert.motion.trajectory, JointTrajectory)
             tally.waited += waiting_time(expert.motion.trajectory, expert.config.motion,
                                          expert.calibration.max_velocity)
         before = phase

@@ -87,9 +87,9 @@ def headline(folder: Path) -> str:
     for path in sorted(folder.glob("*/scores.json")):
         scores = json.loads(path.read_text())
         by_variant = largest_by_variant(scores["rows"])
-        largest = [r for group in by_variant.values() for r in group]
         cells = [variant_cell(v, g) for v, g in by_variant.items()]
-        first, runs = largest[0], next(iter(by_variant.values()))
+        runs = next(iter(by_variant.values()))  # one row per training seed
+        first = runs[0]
         minutes = [scored_minutes(r) for r in runs]
         chosen = (", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in runs)
                   + " (chosen on validation seeds)") if any("checkpoint" in r for r in runs) else ""
