@@ -153,6 +153,50 @@ def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env
     assert 60.0 * 20 / env.events[19].time >= 28.0
 
 
+def test_the_legs_follow_on_without_a_pause_and_the_carry_leaves_halfway_up_clear_of_the_rails(make_env):
+    """The track starts where and when the interception ends, the carry halfway up the lift from the lift's
+    state there (between control steps, not at the next one); the box, still rising, touches no rail."""
+    import mujoco
+
+    from colorsort.expert.config import TRACKING_EXPERT
+    from colorsort.expert.planning import JointTrajectory
+    from colorsort.expert.tracking import DensePath, Phase
+
+    env = make_env(preset="tracking-fast", has_offscreen_renderer=True, ignore_done=True, seed=3)
+    obs = env.reset()
+    expert = make_expert(env)
+    assert isinstance(expert, TrackingExpert)
+    cfg = TRACKING_EXPERT
+    assert expert.carry_from == pytest.approx(cfg.track_descend_time + cfg.track_hold_time + cfg.track_lift_time / 2)
+    m, d = env.mj_model, env.mj_data
+    rails = {g for g in range(m.ngeom) if (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or "").endswith(
+        ("rail_left", "rail_right"))}
+    assert len(rails) == 2
+    expert.reset(obs)
+    tracks = carries = rail_contacts = 0
+    while len(env.events) < 4 and env.cur_time < 30.0:
+        before, now = expert.motion, expert.time
+        obs, *_ = env.step(expert.act(obs))
+        rail_contacts += sum(d.contact[i].geom1 in rails or d.contact[i].geom2 in rails for i in range(d.ncon))
+        motion = expert.motion
+        if motion is before:
+            continue
+        if expert.phase is Phase.TRACK:
+            tracks += 1
+            assert motion.started == pytest.approx(before.end) and now < motion.started <= now + expert.dt + 1e-9
+        elif expert.phase is Phase.MOVE_OVER_BIN:
+            carries += 1
+            path = before.trajectory
+            assert isinstance(path, DensePath) and isinstance(motion.trajectory, JointTrajectory)
+            assert motion.started == pytest.approx(before.started + expert.carry_from)
+            q, qd, _ = motion.trajectory.sample(0.0)
+            np.testing.assert_allclose(q, path.sample(expert.carry_from)[0], atol=1e-9)
+            np.testing.assert_allclose(qd, path.slope(expert.carry_from), atol=1e-9)
+            assert path.slope(expert.carry_from)[1] != 0.0  # the lift was still moving when the carry took over
+    assert [str(e.outcome) for e in env.events] == ["placed"] * 4
+    assert tracks == carries == 4 and rail_contacts == 0
+
+
 def test_the_wait_in_an_interception_is_its_duration_beyond_the_time_optimal_plan():
     """An approach told to take 0.5 s longer than it needs (the box not yet within reach) waited 0.5 s; one
     planned time-optimally, from a moving start to a moving goal, waited nothing."""
@@ -196,6 +240,7 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
     from colorsort.config import BIN_COLORS
     from colorsort.expert.bound import LEGS, commanded_peaks, cycle_at, shortest_cycle
     from colorsort.expert.planning import Waypoint, plan_motion
+    from colorsort.expert.tracking import carry_height
 
     env = make_env(preset="tracking-fast", has_offscreen_renderer=True, seed=0)
     obs = env.reset()
@@ -207,6 +252,10 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
     bound, stops, jerk, reference = (cycle_at(expert, 0.45, "red", mode)
                                      for mode in ("speed", "stops", "jerk", "ruckig"))
     assert bound.legs["down onto the box"] == pytest.approx(np.max(np.abs(q_on - q_over) / vmax))
+    lifted = top - cfg.press + (cfg.track_lift_gap + cfg.press) * 0.5  # halfway up, where the carry takes over
+    assert carry_height(cfg, L) == pytest.approx(lifted)
+    q_lift = expert.ik.solve(Waypoint("lifted", (0.45, L.belt_y, lifted), expert.cup_yaw), q_on)
+    assert bound.legs["lift"] == pytest.approx(np.max(np.abs(q_lift - q_on) / vmax))
     assert reference.legs["down onto the box"] == pytest.approx(plan_motion(q_over, q_on, vmax, cfg.motion).duration)
     assert bound.legs["seal"] == bound.legs["release"] == expert.dt
     a = cfg.motion.acceleration  # from rest, 0.04 m down is a short move: no joint reaches its top speed

@@ -42,6 +42,11 @@ class Motion:
     started: float
     tolerance: float  # [rad] max joint error that counts as arrived
 
+    @property
+    def end(self) -> float:
+        """[s] expert time at which its trajectory ends."""
+        return self.started + self.trajectory.duration
+
     def done(self, now: float) -> bool:
         """Its time is up (whether or not the joints are there)."""
         return now - self.started >= self.trajectory.duration - 1e-9
@@ -153,9 +158,9 @@ class Expert:
         trajectory = plan_motion(start, goal, self.calibration.max_velocity, self.config.motion)
         self.motion = Motion(trajectory, self.time, tolerance)
 
-    def _follow(self, trajectory: Trajectory, tolerance: float) -> None:
-        """Follow ``trajectory`` from now."""
-        self.motion = Motion(trajectory, self.time, tolerance)
+    def _follow(self, trajectory: Trajectory, tolerance: float, started: float | None = None) -> None:
+        """Follow ``trajectory`` from expert time ``started`` [s] (now by default)."""
+        self.motion = Motion(trajectory, self.time if started is None else started, tolerance)
 
     def _arrived(self, q: np.ndarray) -> bool:
         return self.motion is None or self.motion.arrived(q, self.time)

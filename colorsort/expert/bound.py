@@ -1,9 +1,10 @@
 """The shortest cycle of a pick on the tracking belt, from the arm's limits and the cell's geometry.
 
 For a box at ``x`` on the belt's centre line and a bin, a cycle is six legs: down onto the box, the
-seal (one control period: the vacuum switch reports it at the next step), the lift, the carry to the
-bin's first drop slot, the release (one control period), and the way back over the next box at the
-same ``x``. Each motion leg takes, between its two joint configurations (mink IK of the cup poses):
+seal (one control period: the vacuum switch reports it at the next step), the lift (as high as the
+expert lifts before its carry takes over: ``tracking.carry_height``), the carry to the bin's first
+drop slot, the release (one control period), and the way back over the next box at the same ``x``.
+Each motion leg takes, between its two joint configurations (mink IK of the cup poses):
 
 - ``speed`` (the bound): the largest joint displacement over that joint's datasheet speed, as if
   the arm could accelerate at will. No motion of the arm between the two poses is shorter, so no
@@ -31,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from colorsort.expert.planning import JointTrajectory, MotionConfig, Waypoint, plan_motion
-from colorsort.expert.tracking import TrackingExpert
+from colorsort.expert.tracking import TrackingExpert, carry_height
 
 LEGS = ("down onto the box", "seal", "lift", "carry to the bin", "release", "back over the next box")
 MODES = ("speed", "stops", "jerk", "ruckig")
@@ -99,7 +100,7 @@ def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") 
     top = L.belt_top_z + L.box_size
     over, on, lift = (Waypoint(name, (x, L.belt_y, z), expert.cup_yaw) for name, z in (
         ("over the box", top + cfg.approach_gap), ("on the box", top - cfg.press),
-        ("lifted", top + cfg.track_lift_gap)))
+        ("lifted", carry_height(cfg, L))))
     q_over = expert.ik.solve(over, expert.q_wait)
     q_on = expert.ik.solve(on, q_over)
     q_lift = expert.ik.solve(lift, q_on)

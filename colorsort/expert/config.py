@@ -34,7 +34,10 @@ class ExpertConfig:
         track_hold_time: [s] then on it, while the seal forms.
         track_lift_time: [s] then up until the box's bottom is ``track_lift_gap`` over the belt, still moving
             with it; from there it goes to its bin.
-        track_lift_gap: [m] the box's bottom over the belt when the tracking ends (the rails stand 2 cm high).
+        track_lift_gap: [m] the box's bottom over the belt at the top of the lift (the rails stand 2 cm high).
+        track_carry_at: the fraction of the lift after which the carry to the bin takes over, from the
+            lift's state then (1: at its top); below 1 the box goes on rising as it heads for the bin instead
+            of coming to a stop over the belt first.
         turn_to_box: turn the cup to the box's yaw as seen by the sensor; False keeps the cup at its home
             yaw over every box (the 60 mm pad seals on a cube turned any way), so a turned box's demo moves
             the wrist as an unturned one's does.
@@ -59,6 +62,7 @@ class ExpertConfig:
     track_hold_time: float = 0.05
     track_lift_time: float = 0.15
     track_lift_gap: float = 0.05
+    track_carry_at: float = 1.0
     turn_to_box: bool = True
 
     def __post_init__(self) -> None:
@@ -76,10 +80,13 @@ class ExpertConfig:
         for name in ("track_descend_time", "track_hold_time", "track_lift_time"):
             check_range(name, getattr(self, name), 0.05, 2.0)
         check_range("track_lift_gap", self.track_lift_gap, 0.03, 0.3)
+        check_range("track_carry_at", self.track_carry_at, 0.5, 1.0)
 
 
 STOPPING_EXPERT = ExpertConfig()
 # On the never-stopping belt every tenth of a second of the cycle counts (tracking-fast brings a box every
 # 2 s): the cup leaves the bin as soon as the seal is gone (the box falls free of a cup moving up and
-# away), and it follows the box down and up faster (demos/bench_tracking.py measures the result).
-TRACKING_EXPERT = ExpertConfig(release_time=0.0, track_descend_time=0.10, track_lift_time=0.08)
+# away), it follows the box down and up faster (demos/bench_tracking.py measures the result), and the
+# carry takes over halfway up, where the lift's acceleration passes through zero as ruckig's starts
+# (demos/bench_bound.py: the arm's cycle 1.69 s -> 1.62 s, every box placed).
+TRACKING_EXPERT = ExpertConfig(release_time=0.0, track_descend_time=0.10, track_lift_time=0.08, track_carry_at=0.5)

@@ -75,6 +75,11 @@ class DensePath:
         qd = (1 - w) * self.qd[k] + w * self.qd[k + 1]
         return q, qd, np.zeros_like(q)
 
+    def slope(self, t: float) -> np.ndarray:
+        """[rad/s] the velocity of the straight segment between samples that ``sample`` interpolates at ``t`` [s]."""
+        k = min(max(int(t / self.dt), 0), len(self.q) - 2)
+        return (self.q[k + 1] - self.q[k]) / self.dt
+
 
 def smoothstep(u: float) -> float:
     """0 -> 1 with zero slope at both ends, u in [0, 1]."""
@@ -95,6 +100,13 @@ def track_heights(config: ExpertConfig, layout: CellLayout, dt: float) -> np.nda
     down = z_over + (z_on - z_over) * np.array([smoothstep(u) for u in tau / t1])
     up = z_on + (z_up - z_on) * np.array([smoothstep(u) for u in (tau - t2) / (t3 - t2)])
     return np.where(tau <= t1, down, up)
+
+
+def carry_height(config: ExpertConfig, layout: CellLayout) -> float:
+    """[m] the cup's height where the carry to the bin takes over: ``track_carry_at`` of the way up the lift, on
+    ``track_heights``' curve."""
+    top = layout.belt_top_z + layout.box_size
+    return top - config.press + (config.track_lift_gap + config.press) * smoothstep(config.track_carry_at)
 
 
 class TrackingExpert(Expert):
@@ -163,6 +175,12 @@ class TrackingExpert(Expert):
         except UnreachableWaypoint:
             return None
         return q
+
+    @cached_property
+    def carry_from(self) -> float:
+        """[s] into a track path: where the carry to the bin takes over, ``track_carry_at`` of the way up."""
+        c = self.config
+        return c.track_descend_time + c.track_hold_time + c.track_carry_at * c.track_lift_time
 
     def reset(self, obs: dict | None = None) -> None:
         super().reset(obs)
@@ -292,23 +310,25 @@ class TrackingExpert(Expert):
     # 3. meet the box, then follow it down, seal and lift
     def _intercept(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         assert self.motion is not None and self._track_plan is not None, "INTERCEPT follows a planned interception"
-        if self.motion.done(self.time):
+        if self.motion.done(self.time + self.dt):  # it ends before the next command: the track follows on at once
             self.suction = True
-            self._follow(self._track_plan, np.inf)
+            self._follow(self._track_plan, np.inf, started=self.motion.end)
             self._enter(Phase.TRACK)
 
     def _track(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         assert self.motion is not None and self.current is not None, "TRACK follows an interception"
         path = self.motion.trajectory
         assert isinstance(path, DensePath), "TRACK follows the box along a dense path"
-        if not self.motion.done(self.time):
+        carry_from = self.motion.started + self.carry_from
+        if self.time + self.dt < carry_from:  # the next command is still the track's
             return
-        if sealed(obs):  # 5, 6: on to the bin, from the moving state
+        if sealed(obs):  # 5, 6: on to the bin, from the moving state, the box still rising
             color = self.current.cycle.target_bin
             assert color is not None, "only a box with a bin is met"
-            trajectory = plan_motion(path.goal, self._next_drop(color), self.calibration.max_velocity,
-                                     self.config.motion, start_velocity=path.qd[-1])
-            self._follow(trajectory, self.config.drop_tolerance)
+            q, _, _ = path.sample(self.carry_from)
+            trajectory = plan_motion(q, self._next_drop(color), self.calibration.max_velocity,
+                                     self.config.motion, start_velocity=path.slope(self.carry_from))
+            self._follow(trajectory, self.config.drop_tolerance, started=carry_from)
             self._enter(Phase.MOVE_OVER_BIN)
         else:  # no seal: the box rides on
             self.suction = False
