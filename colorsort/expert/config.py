@@ -33,7 +33,7 @@ class ExpertConfig:
         track_descend_time: [s] on a tracking belt, from over the moving box down onto it.
         track_hold_time: [s] then on it, while the seal forms.
         track_lift_time: [s] then up until the box's bottom is ``track_lift_gap`` over the belt, still moving
-            with it; from there it goes to its bin.
+            with it; the carry to its bin leaves on the way (``track_carry_at``).
         track_lift_gap: [m] the box's bottom over the belt at the top of the lift (the rails stand 2 cm high).
         track_carry_at: the fraction of the lift after which the carry to the bin takes over, from the
             lift's state then (1: at its top); below 1 the box goes on rising as it heads for the bin instead

@@ -5,7 +5,8 @@ photo and the belt's encoder alone: ``x = x_photo - (travel - travel_photo)``, y
 (the encoder's speed, travel per control period, predicts ahead). For each box it can meet, it
 plans an interception: where and when the cup is over the box moving with it (ruckig plans to a
 target velocity as well as a position), then follows the box down while it seals and lifts (a dense
-IK path at the belt's velocity), and sorts it as the stopping-belt expert does. A box it can no
+IK path at the belt's velocity), and carries it off from partway up the lift (``track_carry_at``) to
+sort it as the stopping-belt expert does. Each leg starts where and when the one before ends. A box it can no
 longer meet within the arm's reach before the belt's end it lets go: it rides off the end
 (``rejected`` if it has no bin, ``dropped`` otherwise); ``let_go`` counts them.
 
