@@ -155,7 +155,8 @@ def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env
 
 def test_the_legs_follow_on_without_a_pause_and_the_carry_leaves_halfway_up_clear_of_the_rails(make_env):
     """The track starts where and when the interception ends, the carry halfway up the lift from the lift's
-    state there (between control steps, not at the next one); the box, still rising, touches no rail."""
+    state there (between control steps, not at the next one); the box, still rising, touches no rail (contacts
+    read after every control step)."""
     import mujoco
 
     from colorsort.expert.config import TRACKING_EXPERT
