@@ -320,8 +320,8 @@ class TrackingExpert(Expert):
         assert self.motion is not None and self.current is not None, "TRACK follows an interception"
         path = self.motion.trajectory
         assert isinstance(path, DensePath), "TRACK follows the box along a dense path"
-        carry_from = self.motion.started + self.carry_from
-        if self.time + self.dt < carry_from:  # the next command is still the track's
+        leave_at = self.motion.started + self.carry_from  # [s] expert time
+        if self.time + self.dt < leave_at:  # the next command is still the track's
             return
         if sealed(obs):  # 5, 6: on to the bin, from the moving state, the box still rising
             color = self.current.cycle.target_bin
@@ -329,7 +329,7 @@ class TrackingExpert(Expert):
             q, _, _ = path.sample(self.carry_from)
             trajectory = plan_motion(q, self._next_drop(color), self.calibration.max_velocity,
                                      self.config.motion, start_velocity=path.slope(self.carry_from))
-            self._follow(trajectory, self.config.drop_tolerance, started=carry_from)
+            self._follow(trajectory, self.config.drop_tolerance, started=leave_at)
             self._enter(Phase.MOVE_OVER_BIN)
         else:  # no seal: the box rides on
             self.suction = False

@@ -19,6 +19,11 @@ def scored_minutes(r: dict) -> float:
     return next(p["minutes"] for p in r["validation"] if p["step"] == r["checkpoint"])
 
 
+def scored_checkpoints(group: list[dict]) -> str:
+    """"4000/5000/4000": the update each training seed's row was scored at (its chosen checkpoint, else its last)."""
+    return "/".join(str(r.get("checkpoint", r["steps"])) for r in group)
+
+
 def updates(r: dict) -> str:
     """"3600 steps (7.8 passes)": a row's training updates, and the passes over its data they made; with the
     checkpoint the validation seeds chose, ", scored at 2400 after 36 min (chosen on validation seeds)"."""
@@ -32,7 +37,7 @@ def seeds_updates(group: list[dict]) -> str:
     with the minutes of training it took."""
     text = updates({k: v for k, v in group[0].items() if k != "checkpoint"})
     if any("checkpoint" in r for r in group):
-        text += ", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in group) + " after " + \
+        text += ", scored at " + scored_checkpoints(group) + " after " + \
             "/".join(f"{scored_minutes(r):.0f}" for r in group) + " min (chosen on validation seeds)"
     return text
 

@@ -24,7 +24,7 @@ import re
 from collections import Counter
 from pathlib import Path
 
-from colorsort.training.report import curve_table, scored_minutes, span, summary_table
+from colorsort.training.report import curve_table, scored_checkpoints, scored_minutes, span, summary_table
 
 KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
@@ -91,8 +91,8 @@ def headline(folder: Path) -> str:
         runs = next(iter(by_variant.values()))  # one row per training seed
         first = runs[0]
         minutes = [scored_minutes(r) for r in runs]
-        chosen = (", scored at " + "/".join(str(r.get("checkpoint", r["steps"])) for r in runs)
-                  + " (chosen on validation seeds)") if any("checkpoint" in r for r in runs) else ""
+        chosen = (f", scored at {scored_checkpoints(runs)} (chosen on validation seeds)"
+                  if any("checkpoint" in r for r in runs) else "")
         training = (f"{first['demos']} demos, {first['steps']} updates{chosen}, {span(minutes)} min on the CPU"
                     + (f" per seed, {len(runs)} seeds" if len(runs) > 1 else ""))
         name = path.parent.name
