@@ -1,4 +1,4 @@
-"""One ``RobotSpec`` per arm the cell can hold: where it stands, its home pose, its joint speeds.
+"""One ``RobotSpec`` per arm the cell can hold: where it stands, its home pose, its joint speeds and accelerations.
 
 The IRB 140's home pose and datasheet speeds are read from its MJCF (the ``home`` keyframe and
 the ``joint_velocity_limits`` numeric of ``assets/irb140/robot.xml``), so they are written once.
@@ -30,12 +30,15 @@ class RobotSpec:
             front of the base, pointing down.
         base: where the base stands on the floor [m].
         joint_speeds: the maker's maximum joint speeds [rad/s], one per joint.
+        joint_accelerations: the maker's maximum joint accelerations [rad/s^2], one per joint, where it
+            publishes them; None: what the model's motors give (``expert.limits.torque_limited_accelerations``).
     """
 
     name: str
     home: tuple[float, ...]
     base: tuple[float, float, float]
     joint_speeds: tuple[float, ...]
+    joint_accelerations: tuple[float, ...] | None = None
 
     @property
     def n_joints(self) -> int:
@@ -78,8 +81,11 @@ ROBOTS: dict[str, RobotSpec] = {
     "IRB140": _from_mjcf("IRB140", asset_path("irb140", "robot.xml"), base=(0.0, 0.0, 0.0)),
     # robosuite's own Panda and UR5e home poses are for a table on a pedestal and hit the bins here.
     # Speeds: Franka Emika's datasheet for the Panda, Universal Robots' (180 deg/s on every joint) for the UR5e.
+    # Accelerations: Franka's, as libfranka enforces them (kMaxJointAcceleration); ABB and Universal Robots publish
+    # none per joint, so the IRB 140's and the UR5e's come from their models' motors.
     "Panda": RobotSpec("Panda", home=(0.0, -0.3143, 0.0, -1.8538, 0.0, 1.5395, 0.785), base=(0.0, 0.0, 0.0),
-                       joint_speeds=(2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61)),
+                       joint_speeds=(2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61),
+                       joint_accelerations=(15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0)),
     # The UR5e's shoulder is offset 0.14 m to the side of its base axis and its upper arm swings low:
     # 6 cm further back, it clears the bins.
     "UR5e": RobotSpec("UR5e", home=(-0.3024, -1.6395, 1.2246, -1.1559, -1.5708, -0.3023), base=(-0.06, 0.0, 0.0),

@@ -8,7 +8,8 @@ of the reach window) four ways: three bounds (each leg at the datasheet joint sp
 unlimited; then at rest on the box and over the bin, with the expert's acceleration; then with its
 jerk too) and a ruckig reference (every leg rest to rest, with the expert's acceleration and jerk); then the
 expert's measured cycle per phase (the phase times ``colorsort-sort`` reports, on the same preset and seeds,
-sim seconds per box placed) and the ratio of its active cycle (intercept, track, carry, release) to
+from each seed's first interception on, sim seconds per box placed) and the ratio of its active cycle
+(intercept, track, carry, release, and the way back to the wait pose when no box is within reach yet) to
 each bound for the same boxes: the bins' cycles weighted by how many of the placed boxes went to each
 (a box's colour is drawn uniformly, but a few seeds' mix is not: the far bin's cycle is 1.6 times the
 near one's). The ratio to the bins' plain mean is printed too. An interception that
@@ -37,8 +38,10 @@ from colorsort.expert.tracking import Phase as TrackingPhase
 from colorsort.expert.tracking import TrackingExpert
 from colorsort.results import recorded
 
+# the expert's phases that a cycle needs: the way back from the bin counts whether it heads for the next box or,
+# none being within reach yet, for the wait pose at the upstream end of the reach window, where boxes come in
 ACTIVE = tuple(p.value for p in (TrackingPhase.INTERCEPT, TrackingPhase.TRACK, TrackingPhase.MOVE_OVER_BIN,
-                                 TrackingPhase.RELEASE))  # the expert's phases that a cycle needs
+                                 TrackingPhase.RELEASE, TrackingPhase.MOVE_TO_WAIT))
 
 
 def main() -> None:
@@ -52,7 +55,8 @@ def main() -> None:
                    help="the expert's joint jerk limit [rad/s^3] (its preset's by default), for the expert and the "
                         "ruckig reference")
     p.add_argument("--acceleration", type=float, default=TRACKING_EXPERT.motion.acceleration,
-                   help="the expert's joint acceleration limit [rad/s^2] (its preset's by default), as --jerk")
+                   help="the expert's joint acceleration limit [rad/s^2], every joint, as --jerk (by default its "
+                        "preset's: each joint's own torque-limited acceleration)")
     p.add_argument("--descend", type=float, default=TRACKING_EXPERT.track_descend_time,
                    help="the expert's time down onto the moving box [s] (its preset's by default)")
     p.add_argument("--lift", type=float, default=TRACKING_EXPERT.track_lift_time,
@@ -68,12 +72,14 @@ def main() -> None:
     assert isinstance(expert, TrackingExpert)
     cycles = {mode: {c: shortest_cycle(expert, c, mode) for c in BIN_COLORS} for mode in MODES}
     env.close()
-    m = expert.config.motion
+    lim = expert.limits
+    accelerations = ", ".join(f"{a:.1f}" for a in lim.acceleration)
+    jerks = ", ".join(f"{j:g}" for j in np.unique(lim.jerk))
     print(f"IRB140 on '{args.preset}': the shortest cycle per bin [s], the box met at x on the belt; speed: each leg "
           f"at the datasheet joint speeds, acceleration unlimited (a bound); stops: at rest on the box and over the "
-          f"bin, acceleration {m.acceleration:g} rad/s^2, jerk unlimited (a bound); jerk: the same, jerk {m.jerk:g} "
-          f"rad/s^3 too (the bound at the expert's limits); ruckig: every leg rest to rest at the expert's limits "
-          f"(a reference)")
+          f"bin, the expert's joint accelerations ({accelerations} rad/s^2, joints 1-{len(lim.acceleration)}), jerk "
+          f"unlimited (a bound); jerk: the same, jerk {jerks} rad/s^3 too (the bound at the expert's limits); "
+          f"ruckig: every leg rest to rest at the expert's limits (a reference)")
     columns = [(mode, c) for mode in MODES for c in BIN_COLORS]
     print("| leg | " + " | ".join(f"{mode}: {c} (x = {cycles[mode][c].x:.2f} m)" for mode, c in columns) + " |")
     print("| --- |" + " --- |" * len(columns))
@@ -93,12 +99,13 @@ def main() -> None:
         print(f"| {phase} | {seconds / totals.placed:.3f} | {'yes' if phase in ACTIVE else 'no (waiting for a box)'} |")
     print(f"| of which, in intercept box: waiting for the box to come within reach | {totals.per_box_waited:.3f} | "
           "no |")
-    print(f"\nthe largest joint acceleration and jerk the expert commanded, per phase (its reference's finite "
-          f"differences at the control period; its planner's limits: {m.acceleration:g} rad/s^2, {m.jerk:g} rad/s^3)")
-    print("| phase | acceleration [rad/s^2] | jerk [rad/s^3] |")
-    print("| --- | --- | --- |")
+    print("\nthe largest joint acceleration and jerk the expert commanded, per phase (its reference's finite "
+          "differences at the control period), and the largest share of its planner's limit any joint took")
+    print("| phase | acceleration [rad/s^2] | of the joint's limit | jerk [rad/s^3] | of the joint's limit |")
+    print("| --- | --- | --- | --- | --- |")
     for phase, (acceleration, jerk) in totals.peaks.items():
-        print(f"| {phase} | {acceleration:.1f} | {jerk:.0f} |")
+        print(f"| {phase} | {acceleration.max():.1f} | {np.max(acceleration / lim.acceleration):.2f} | "
+              f"{jerk.max():.0f} | {np.max(jerk / lim.jerk):.2f} |")
 
     placed = {c: totals.bins.get(c, 0) for c in BIN_COLORS}
     mix = {mode: totals.bound(cycles[mode]) for mode in MODES}
@@ -130,7 +137,7 @@ class Tally:
     placed: int = 0
     waited: float = 0.0
     bins: dict[str, int] = field(default_factory=dict)  # boxes placed per bin
-    peaks: dict[str, np.ndarray] = field(default_factory=dict)  # per phase: the largest |acceleration|, |jerk|
+    peaks: dict[str, np.ndarray] = field(default_factory=dict)  # per phase, per joint: largest |acceleration|, |jerk|
 
     def add(self, other: Tally) -> None:
         for phase, seconds in other.phases.items():
@@ -183,7 +190,7 @@ def run_expert(config: ExpertConfig, preset: str, seed: int, boxes: int | None =
     expert = make_expert(env, config)
     assert isinstance(expert, TrackingExpert)
     expert.reset(obs)
-    tally, before = Tally(), None
+    tally, before, started = Tally(), None, False
     references: list[np.ndarray] = []
     phases: list[str] = []
     while len(env.events) < count and env.cur_time < end:
@@ -194,10 +201,11 @@ def run_expert(config: ExpertConfig, preset: str, seed: int, boxes: int | None =
         phases.append(phase.value)
         if phase is TrackingPhase.INTERCEPT and before is not TrackingPhase.INTERCEPT:
             assert isinstance(expert.motion.trajectory, JointTrajectory)
-            tally.waited += waiting_time(expert.motion.trajectory, expert.config.motion,
-                                         expert.calibration.max_velocity)
+            tally.waited += waiting_time(expert.motion.trajectory, expert.limits)
         before = phase
-        tally.phases[phase.value] = tally.phases.get(phase.value, 0.0) + env.control_timestep
+        started = started or phase is TrackingPhase.INTERCEPT  # the start-up move from home is no cycle's
+        if started:
+            tally.phases[phase.value] = tally.phases.get(phase.value, 0.0) + env.control_timestep
         obs, *_ = env.step(action)
     for e in env.events:
         if e.outcome is Outcome.PLACED and e.bin is not None:

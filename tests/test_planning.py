@@ -8,6 +8,7 @@ from colorsort.expert.planning import (
     ANGLE_TOLERANCE,
     POSITION_TOLERANCE,
     CupIK,
+    JointLimits,
     MotionConfig,
     UnreachableWaypoint,
     Waypoint,
@@ -61,7 +62,7 @@ def test_trajectories_respect_limits_at_every_sample(speed_factor):
     rng = np.random.default_rng(1)
     for _ in range(10):
         start, goal = rng.uniform(-1.5, 1.5, (2, 6))
-        traj = plan_motion(start, goal, np.array(ROBOTS["IRB140"].joint_speeds), config)
+        traj = plan_motion(start, goal, JointLimits.of(np.array(ROBOTS["IRB140"].joint_speeds), config))
         times = np.arange(0.0, traj.duration + 1e-9, 1e-3)
         samples = [traj.sample(t) for t in times]
         vel = np.array([s[1] for s in samples])
@@ -77,8 +78,8 @@ def test_trajectories_respect_limits_at_every_sample(speed_factor):
 def test_slower_speed_factor_takes_longer():
     start, goal = np.zeros(6), np.full(6, 1.5)
     v = np.array(ROBOTS["IRB140"].joint_speeds)
-    fast = plan_motion(start, goal, v, MotionConfig(speed_factor=1.0)).duration
-    slow = plan_motion(start, goal, v, MotionConfig(speed_factor=0.25)).duration
+    fast = plan_motion(start, goal, JointLimits.of(v, MotionConfig(speed_factor=1.0))).duration
+    slow = plan_motion(start, goal, JointLimits.of(v, MotionConfig(speed_factor=0.25))).duration
     assert slow > 1.5 * fast
 
 
@@ -87,3 +88,21 @@ def test_slower_speed_factor_takes_longer():
 def test_motion_config_rejects_bad_values(field, value):
     with pytest.raises(ValueError, match=field):
         MotionConfig(**{field: value})
+
+
+def test_each_joint_keeps_to_its_own_acceleration():
+    """Given per joint (MotionConfig(acceleration=None): the arm's own), each joint's acceleration stays within
+    its own limit and the slowest joint to accelerate sets the duration; without them the limits are refused."""
+    v = np.array(ROBOTS["IRB140"].joint_speeds)
+    own = np.array([5.0, 10.0, 20.0, 40.0, 40.0, 40.0])  # [rad/s^2]
+    limits = JointLimits.of(v, MotionConfig(acceleration=None, jerk=1000.0), own)
+    np.testing.assert_array_equal(limits.acceleration, own)
+    start, goal = np.zeros(6), np.full(6, 0.5)
+    traj = plan_motion(start, goal, limits)
+    acc = np.array([traj.sample(t)[2] for t in np.arange(0.0, traj.duration, 1e-3)])
+    assert np.all(np.abs(acc) <= own * (1 + 1e-6))
+    assert np.abs(acc[:, 0]).max() == pytest.approx(own[0], rel=1e-3)  # joint 1, the slowest, at its limit
+    uniform = plan_motion(start, goal, JointLimits.of(v, MotionConfig(acceleration=40.0, jerk=1000.0)))
+    assert traj.duration > uniform.duration
+    with pytest.raises(ValueError, match="give accelerations"):
+        JointLimits.of(v, MotionConfig(acceleration=None))

@@ -18,8 +18,17 @@ import numpy as np
 from colorsort.config import BIN_COLORS
 from colorsort.expert.calibration import Calibration
 from colorsort.expert.config import ExpertConfig
+from colorsort.expert.limits import torque_limited_accelerations
 from colorsort.expert.perception import ColorSensor, Detection, bin_for
-from colorsort.expert.planning import CupIK, Trajectory, UnreachableWaypoint, Waypoint, plan_motion, site_yaw
+from colorsort.expert.planning import (
+    CupIK,
+    JointLimits,
+    Trajectory,
+    UnreachableWaypoint,
+    Waypoint,
+    plan_motion,
+    site_yaw,
+)
 
 Handler = Callable[[dict, np.ndarray, np.ndarray], None]  # (observation, joints now [rad], motion goal [rad])
 
@@ -79,6 +88,10 @@ class Expert:
         sensor_image: the colour image for an observation (``calibration.sensor_source``).
         config: the expert's settings.
 
+    Its motions keep to ``limits`` (``JointLimits``): the datasheet speeds, and the config's acceleration
+    and jerk, or where the config leaves the acceleration to the arm each joint's own: its maker's figure,
+    else what its motor's torque gives it (``limits.torque_limited_accelerations``).
+
     A subclass sets ``START`` (its first phase) and implements ``handlers``, ``wait_point`` and
     ``drop_seed``. Use: ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)``,
     then ``action = expert.act(obs)`` every step.
@@ -98,6 +111,11 @@ class Expert:
         self.sensor = ColorSensor(calibration.camera, L, config.perception)
         self.q_wait = self.ik.solve(Waypoint("wait", self.wait_point(), self.cup_yaw), self.home)
         self.q_drop = {color: self._drop_slots(color, k) for k, color in enumerate(BIN_COLORS)}
+        own = calibration.max_acceleration  # the joints' own accelerations, where the config leaves them to the arm
+        if config.motion.acceleration is None and own is None:
+            poses = [self.home, self.q_wait, *(q for slots in self.q_drop.values() for q in slots)]
+            own = torque_limited_accelerations(calibration.kinematics, poses)
+        self.limits = JointLimits.of(calibration.max_velocity, config.motion, own)
         self._handlers: dict[Enum, Handler] = self.handlers()
         self.reset()
 
@@ -144,8 +162,10 @@ class Expert:
         goal = self.motion.trajectory.goal if self.motion is not None else self._q_cmd
         self._handlers[self.phase](obs, q, goal)
         if self.motion is not None:
-            ref, vel, _ = self.motion.trajectory.sample(self.time - self.motion.started + self.dt)
+            ref, vel, acc = self.motion.trajectory.sample(self.time - self.motion.started + self.dt)
             self._q_cmd = ref + self.calibration.lead * vel
+            if self.config.feed_forward_acceleration:
+                self._q_cmd = self._q_cmd + self.calibration.compliance * acc
         self.time += self.dt
         return np.concatenate([self._q_cmd, [1.0 if self.suction else -1.0, 1.0 if self.belt_pass else -1.0]])
 
@@ -155,7 +175,7 @@ class Expert:
     # ------------------------------------------------------------------ the motion follower
     def _start_motion(self, start: np.ndarray, goal: np.ndarray, tolerance: float) -> None:
         """A jerk-limited motion from rest at ``start`` to rest at ``goal`` [rad], from now."""
-        trajectory = plan_motion(start, goal, self.calibration.max_velocity, self.config.motion)
+        trajectory = plan_motion(start, goal, self.limits)
         self.motion = Motion(trajectory, self.time, tolerance)
 
     def _follow(self, trajectory: Trajectory, tolerance: float, started: float | None = None) -> None:

@@ -12,12 +12,13 @@ Each motion leg takes, between its two joint configurations (mink IK of the cup 
 - ``stops`` (the bound with acceleration): the cup is at rest on the box (a standing box) and over
   the bin at the release, and moves freely through the other two points: each leg is the least time
   to start from or come to rest there, per joint, at the datasheet speeds and the expert's
-  acceleration (``time_to_stop``), jerk unlimited. A motion that stops where it stops can do no better.
+  accelerations (``expert.limits``; on the tracking belt each joint's own), jerk unlimited
+  (``time_to_stop``). A motion that stops where it stops can do no better.
 - ``jerk`` (the bound at the expert's planner's limits): ``stops`` with the jerk limited too, at the
   expert's jerk (``time_from_rest``): the tightest of the three bounds, and the one that prices what
   the expert's jerk costs on the short legs (down onto the box, the lift). The tracking expert follows
-  the box down and up along a dense path its planner does not time, so it may command more there
-  (``commanded_peaks`` measures what it commands, phase by phase).
+  the box down and up along a dense path its planner does not time; ``commanded_peaks`` measures what
+  it commands, phase by phase, against its limits.
 - ``ruckig`` (a reference): a time-optimal ruckig motion from rest to rest at the datasheet speeds
   and the expert's acceleration and jerk. An expert that blends legs (it meets a moving box already
   moving and carries from the moving state) can beat it.
@@ -31,16 +32,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from colorsort.expert.planning import JointTrajectory, MotionConfig, Waypoint, plan_motion
+from colorsort.expert.planning import JointLimits, JointTrajectory, Waypoint, plan_motion
 from colorsort.expert.tracking import TrackingExpert, carry_height
 
 LEGS = ("down onto the box", "seal", "lift", "carry to the bin", "release", "back over the next box")
 MODES = ("speed", "stops", "jerk", "ruckig")
 
 
-def time_to_stop(d: np.ndarray, vmax: np.ndarray, a: float) -> np.ndarray:
+def time_to_stop(d: np.ndarray, vmax: np.ndarray, a: np.ndarray | float) -> np.ndarray:
     """[s] per joint: the least time to move ``d`` [rad] and be at rest at the end (or to start from rest),
-    the other end's velocity free, at speeds up to ``vmax`` [rad/s] and accelerations up to ``a`` [rad/s^2]."""
+    the other end's velocity free, at speeds up to ``vmax`` [rad/s] and accelerations up to ``a`` [rad/s^2]
+    (per joint or every joint)."""
     d = np.abs(d)
     cruise = d >= vmax**2 / (2 * a)
     return np.where(cruise, d / vmax + vmax / (2 * a), np.sqrt(2 * d / a))
@@ -63,17 +65,19 @@ def distance_from_rest(t: float, vmax: float, a: float, j: float) -> float:
     return p + vmax * max(t - 2 * ramp - hold, 0.0)
 
 
-def time_from_rest(d: np.ndarray, vmax: np.ndarray, a: float, j: float) -> np.ndarray:
+def time_from_rest(d: np.ndarray, vmax: np.ndarray, a: np.ndarray | float, j: np.ndarray | float) -> np.ndarray:
     """[s] per joint: ``time_to_stop`` with the jerk limited to ``j`` [rad/s^3] too (from rest, or to rest:
-    the same by time reversal), the inverse of ``distance_from_rest`` to 1 microsecond."""
+    the same by time reversal), the inverse of ``distance_from_rest`` to 1 microsecond; ``a`` and ``j`` per
+    joint or every joint."""
     times = []
-    for dist, v in zip(np.abs(d), vmax, strict=True):
+    d = np.abs(np.asarray(d, float))
+    for dist, v, aj, jj in zip(d, vmax, np.broadcast_to(a, d.shape), np.broadcast_to(j, d.shape), strict=True):
         lo, hi = 0.0, 1.0
-        while distance_from_rest(hi, v, a, j) < dist:
+        while distance_from_rest(hi, v, aj, jj) < dist:
             hi *= 2
         while hi - lo > 1e-6:
             mid = (lo + hi) / 2
-            lo, hi = (mid, hi) if distance_from_rest(mid, v, a, j) < dist else (lo, mid)
+            lo, hi = (mid, hi) if distance_from_rest(mid, v, aj, jj) < dist else (lo, mid)
         times.append(hi)
     return np.asarray(times)
 
@@ -106,17 +110,16 @@ def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") 
     q_lift = expert.ik.solve(lift, q_on)
     q_drop = expert.q_drop[color][0]
 
-    vmax = np.asarray(expert.calibration.max_velocity, float)
+    vmax, lim = np.asarray(expert.calibration.max_velocity, float), expert.limits
 
     def move(a: np.ndarray, b: np.ndarray) -> float:
         if mode == "speed":
             return float(np.max(np.abs(b - a) / vmax))
-        limit = vmax * cfg.motion.speed_factor
         if mode == "stops":
-            return float(np.max(time_to_stop(b - a, limit, cfg.motion.acceleration)))
+            return float(np.max(time_to_stop(b - a, lim.velocity, lim.acceleration)))
         if mode == "jerk":
-            return float(np.max(time_from_rest(b - a, limit, cfg.motion.acceleration, cfg.motion.jerk)))
-        return plan_motion(a, b, vmax, cfg.motion).duration
+            return float(np.max(time_from_rest(b - a, lim.velocity, lim.acceleration, lim.jerk)))
+        return plan_motion(a, b, lim).duration
 
     legs = dict(zip(LEGS, (move(q_over, q_on), expert.dt, move(q_on, q_lift), move(q_lift, q_drop), expert.dt,
                            move(q_drop, q_over)), strict=True))
@@ -131,24 +134,25 @@ def shortest_cycle(expert: TrackingExpert, color: str, mode: str = "speed", step
 
 
 def commanded_peaks(q: np.ndarray, phases: list[str], dt: float) -> dict[str, np.ndarray]:
-    """Per phase, the largest joint acceleration [rad/s^2] and jerk [rad/s^3] an expert commanded, as its
-    controller sees them: finite differences of the reference ``q`` (K, n), one row per control period ``dt``
-    [s], ``phases`` (K,) the phase of each row. A second difference counts for its middle row's phase, a third
-    for its second row's."""
-    acceleration = np.abs(np.diff(q, 2, axis=0)).max(axis=1) / dt**2  # row k + 1
-    jerk = np.abs(np.diff(q, 3, axis=0)).max(axis=1) / dt**3  # rows k + 1 and k + 2
+    """Per phase, each joint's largest acceleration [rad/s^2] (row 0) and jerk [rad/s^3] (row 1) an expert
+    commanded, as its controller sees them: finite differences of the reference ``q`` (K, n), one row per
+    control period ``dt`` [s], ``phases`` (K,) the phase of each row. A second difference counts for its middle
+    row's phase, a third for its second row's."""
+    acceleration = np.abs(np.diff(q, 2, axis=0)) / dt**2  # row k + 1
+    jerk = np.abs(np.diff(q, 3, axis=0)) / dt**3  # rows k + 1 and k + 2
     out: dict[str, np.ndarray] = {}
     for k, phase in enumerate(phases[1:-1]):
-        peak = np.array([acceleration[k], jerk[k] if k < len(jerk) else 0.0])
+        peak = np.stack([acceleration[k], jerk[k] if k < len(jerk) else np.zeros(q.shape[1])])
         out[phase] = np.maximum(out.get(phase, peak), peak)
     return out
 
 
-def waiting_time(approach: JointTrajectory, motion: MotionConfig, max_velocity: np.ndarray) -> float:
+def waiting_time(approach: JointTrajectory, limits: JointLimits) -> float:
     """[s] how much of a planned interception ``approach`` waits for the box to come within reach: its
-    duration less that of the time-optimal plan between the same states (same limits, no minimum duration)."""
+    duration less that of the time-optimal plan between the same states (same ``limits``, no minimum
+    duration)."""
     q0, qd0, qdd0 = approach.sample(0.0)
     q1, qd1, _ = approach.sample(approach.duration)
-    fastest = plan_motion(q0, q1, max_velocity, motion, start_velocity=qd0, start_acceleration=qdd0,
+    fastest = plan_motion(q0, q1, limits, start_velocity=qd0, start_acceleration=qdd0,
                           goal_velocity=qd1)
     return max(approach.duration - fastest.duration, 0.0)

@@ -1,7 +1,8 @@
 """What the expert knows about the cell before it starts: a calibration, as a real integrator measures it.
 
-The sensor camera's model (intrinsics and pose), the arm's kinematics for IK, its home pose and
-joint speeds, the position controller's gains, the cell's layout and the control period. It is read
+The sensor camera's model (intrinsics and pose), the arm's kinematics for IK, its home pose,
+joint speeds and (where its maker publishes them) joint accelerations, the position controller's
+gains, the cell's layout and the control period. It is read
 once from a ``ColorSort`` env through public handles; the expert never touches the env's state.
 """
 
@@ -30,8 +31,12 @@ class Calibration:
         kinematics: the arm and its cup, alone (the model mink solves IK on).
         home: joint angles [rad] of the arm's home pose.
         max_velocity: the maker's joint speeds [rad/s].
+        max_acceleration: the maker's joint accelerations [rad/s^2], or None where it publishes none.
         lead: [s] per joint, the position controller's kd / kp: it lags its target by that times
             the speed, so the expert leads the target by as much (velocity feed-forward).
+        compliance: [s^2] per joint, 1 / kp: the controller lags its target by that times the acceleration
+            (its torque is the mass matrix times kp (target - q) - kd q'), the expert's acceleration
+            feed-forward where its config asks for one.
         layout: the cell's geometry [m].
         control_period: [s] between actions.
     """
@@ -43,6 +48,8 @@ class Calibration:
     lead: np.ndarray
     layout: CellLayout
     control_period: float
+    compliance: np.ndarray
+    max_acceleration: np.ndarray | None = None
 
     @classmethod
     def from_env(cls, env: ColorSort, photo_size: tuple[int, int]) -> Calibration:
@@ -50,9 +57,12 @@ class Calibration:
         robot = env.robots[0]
         controller = robot.part_controllers["right"]
         camera = CameraModel.from_sim(env.mj_model, env.mj_data, "sensor", *photo_size)
-        lead = np.asarray(controller.kd, float) / np.asarray(controller.kp, float)
-        return cls(camera, robot.robot_model.get_model(mode="mujoco"), np.asarray(env.robot_spec.home, float),
-                   np.array(env.robot_spec.joint_speeds), lead, env.layout, env.control_timestep)
+        kp = np.asarray(controller.kp, float)
+        lead = np.asarray(controller.kd, float) / kp
+        spec = env.robot_spec
+        return cls(camera, robot.robot_model.get_model(mode="mujoco"), np.asarray(spec.home, float),
+                   np.array(spec.joint_speeds), lead, env.layout, env.control_timestep, 1.0 / kp,
+                   None if spec.joint_accelerations is None else np.array(spec.joint_accelerations))
 
 
 def sensor_source(env: ColorSort, size: int) -> tuple[tuple[int, int], Callable[[dict], np.ndarray]]:

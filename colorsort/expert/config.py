@@ -38,6 +38,9 @@ class ExpertConfig:
         track_carry_at: the fraction of the lift after which the carry to the bin takes over, from the
             lift's state then (1: at its top); below 1 the box goes on rising as it heads for the bin instead
             of coming to a stop over the belt first.
+        feed_forward_acceleration: lead the joint targets by the reference's acceleration times the
+            controller's compliance (1 / kp) as well as by its speed times kd / kp, so that the arm keeps to
+            its reference when it accelerates hard instead of lagging up to acceleration / kp behind it.
         turn_to_box: turn the cup to the box's yaw as seen by the sensor; False keeps the cup at its home
             yaw over every box (the 60 mm pad seals on a cube turned any way), so a turned box's demo moves
             the wrist as an unturned one's does.
@@ -63,6 +66,7 @@ class ExpertConfig:
     track_lift_time: float = 0.15
     track_lift_gap: float = 0.05
     track_carry_at: float = 1.0
+    feed_forward_acceleration: bool = False
     turn_to_box: bool = True
 
     def __post_init__(self) -> None:
@@ -89,4 +93,6 @@ STOPPING_EXPERT = ExpertConfig()
 # away), it follows the box down and up faster (demos/bench_tracking.py measures the result), and the
 # carry takes over halfway up, where the lift's acceleration passes through zero as ruckig's starts
 # (demos/bench_bound.py: the arm's cycle 1.69 s -> 1.62 s, every box placed).
-TRACKING_EXPERT = ExpertConfig(release_time=0.0, track_descend_time=0.10, track_lift_time=0.08, track_carry_at=0.5)
+TRACKING_EXPERT = ExpertConfig(motion=MotionConfig(acceleration=None, jerk=1500.0), release_time=0.0,
+                               track_descend_time=0.10, track_lift_time=0.08, track_carry_at=0.5,
+                               feed_forward_acceleration=True)

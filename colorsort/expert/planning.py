@@ -6,8 +6,10 @@ home configuration, and the joint limits. A waypoint it cannot reach within 1 mm
 ``UnreachableWaypoint`` error naming it.
 
 ``plan_motion`` connects two joint configurations with a time-optimal, jerk-limited trajectory
-(ruckig), within the robot's datasheet joint speeds scaled by ``MotionConfig.speed_factor`` and
-the configured acceleration and jerk limits, as the original cell's Reflexxes call did.
+(ruckig), within ``JointLimits``: the robot's datasheet joint speeds scaled by
+``MotionConfig.speed_factor``, and the configured acceleration and jerk limits (or each joint's own
+torque-limited acceleration, ``limits.torque_limited_accelerations``), as the original cell's Reflexxes
+call did.
 """
 
 from __future__ import annotations
@@ -33,18 +35,45 @@ class MotionConfig:
 
     Attributes:
         speed_factor: fraction of the datasheet joint speeds used, in (0, 1].
-        acceleration: max joint acceleration [rad/s^2], every joint.
+        acceleration: max joint acceleration [rad/s^2], every joint; None: each joint's own, what its
+            actuator's torque limit gives it (``limits.torque_limited_accelerations``).
         jerk: max joint jerk [rad/s^3], every joint.
     """
 
     speed_factor: float = 1.0
-    acceleration: float = 15.0
+    acceleration: float | None = 15.0
     jerk: float = 150.0
 
     def __post_init__(self) -> None:
         check_range("speed_factor", self.speed_factor, 0.0, 1.0, low_inclusive=False)
-        check_range("acceleration", self.acceleration, 0.0, 100.0, low_inclusive=False)  # [rad/s^2]
+        if self.acceleration is not None:
+            check_range("acceleration", self.acceleration, 0.0, 100.0, low_inclusive=False)  # [rad/s^2]
         check_range("jerk", self.jerk, 0.0, 5000.0, low_inclusive=False)  # [rad/s^3]
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """What a planned motion keeps to, per joint: speed [rad/s], acceleration [rad/s^2], jerk [rad/s^3]."""
+
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    jerk: np.ndarray
+
+    @classmethod
+    def of(cls, max_velocity: np.ndarray, config: MotionConfig,
+           accelerations: np.ndarray | None = None) -> JointLimits:
+        """The limits ``config`` sets for joints of datasheet speeds ``max_velocity`` [rad/s]; ``accelerations``
+        [rad/s^2], per joint, are the joints' own where ``config.acceleration`` is None (and are then needed)."""
+        velocity = np.asarray(max_velocity, float) * config.speed_factor
+        acceleration: np.ndarray
+        if config.acceleration is not None:
+            acceleration = np.full(len(velocity), config.acceleration)
+        elif accelerations is None:
+            raise ValueError("MotionConfig(acceleration=None) plans at each joint's own acceleration: "
+                             "give accelerations")
+        else:
+            acceleration = np.asarray(accelerations, float)
+        return cls(velocity, acceleration, np.full(len(velocity), config.jerk))
 
 
 @dataclass(frozen=True)
@@ -174,16 +203,13 @@ class JointTrajectory:
         return np.array(pos), np.array(vel), np.array(acc)
 
 
-def plan_motion(start: np.ndarray, goal: np.ndarray, max_velocity: np.ndarray, config: MotionConfig,
+def plan_motion(start: np.ndarray, goal: np.ndarray, limits: JointLimits,
                 start_velocity: np.ndarray | None = None, start_acceleration: np.ndarray | None = None,
                 goal_velocity: np.ndarray | None = None, minimum_duration: float | None = None) -> JointTrajectory:
     """Time-optimal jerk-limited motion from ``start`` to ``goal`` [rad], (n,): from rest to rest unless
     ``start_velocity`` [rad/s], ``start_acceleration`` [rad/s^2] or ``goal_velocity`` [rad/s] say otherwise
-    (ruckig plans to a target velocity as well as a position), taking at least ``minimum_duration`` [s].
-
-    Args:
-        max_velocity: the robot's joint speed limits [rad/s], (n,); scaled by ``config.speed_factor``.
-    """
+    (ruckig plans to a target velocity as well as a position), taking at least ``minimum_duration`` [s],
+    within ``limits``."""
     n = len(start)
     zeros = [0.0] * n
     inp = ruckig.InputParameter(n)
@@ -193,9 +219,9 @@ def plan_motion(start: np.ndarray, goal: np.ndarray, max_velocity: np.ndarray, c
     inp.target_position = list(map(float, goal))
     inp.target_velocity = zeros if goal_velocity is None else list(map(float, goal_velocity))
     inp.target_acceleration = zeros
-    inp.max_velocity = list(map(float, np.asarray(max_velocity) * config.speed_factor))
-    inp.max_acceleration = [config.acceleration] * n
-    inp.max_jerk = [config.jerk] * n
+    inp.max_velocity = list(map(float, limits.velocity))
+    inp.max_acceleration = list(map(float, limits.acceleration))
+    inp.max_jerk = list(map(float, limits.jerk))
     if minimum_duration is not None:
         inp.minimum_duration = float(minimum_duration)
     trajectory = ruckig.Trajectory(n)

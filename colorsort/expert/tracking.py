@@ -280,7 +280,7 @@ class TrackingExpert(Expert):
             except UnreachableWaypoint:  # off the centre line the window is shorter: meet it further on
                 x_hi, t_meet = x - 0.02, now + (self._box_x(s, now) - (x - 0.02)) / v
                 continue
-            approach = plan_motion(start[0], q_over, self.calibration.max_velocity, cfg.motion, start_velocity=start[1],
+            approach = plan_motion(start[0], q_over, self.limits, start_velocity=start[1],
                                    start_acceleration=start[2], goal_velocity=qd_over, minimum_duration=wait)
             arrive = now + approach.duration
             if abs(self._box_x(s, arrive) - x) < 0.002:  # [m]
@@ -327,8 +327,7 @@ class TrackingExpert(Expert):
             color = self.current.cycle.target_bin
             assert color is not None, "only a box with a bin is met"
             q, _, _ = path.sample(self.carry_from)
-            trajectory = plan_motion(q, self._next_drop(color), self.calibration.max_velocity,
-                                     self.config.motion, start_velocity=path.slope(self.carry_from))
+            trajectory = plan_motion(q, self._next_drop(color), self.limits, start_velocity=path.slope(self.carry_from))
             self._follow(trajectory, self.config.drop_tolerance, started=leave_at)
             self._enter(Phase.MOVE_OVER_BIN)
         else:  # no seal: the box rides on
@@ -361,6 +360,6 @@ class TrackingExpert(Expert):
 
     def _start_from_here(self, goal: np.ndarray, tolerance: float) -> None:
         ref, vel, acc = self._current_state()
-        trajectory = plan_motion(ref, goal, self.calibration.max_velocity, self.config.motion, start_velocity=vel,
+        trajectory = plan_motion(ref, goal, self.limits, start_velocity=vel,
                                  start_acceleration=acc)
         self._follow(trajectory, tolerance)
