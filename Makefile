@@ -63,9 +63,8 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_sort.py --robot UR5e --seeds 2 --boxes 10
 	$(VENV)/bin/python demos/bench_tracking.py --seeds 10 --boxes 20 --workers 2
 	$(VENV)/bin/python demos/bench_bound.py
-	$(VENV)/bin/python demos/bench_bound.py --jerk 1500
+	$(VENV)/bin/python demos/bench_bound.py --acceleration 15 --jerk 150
 	$(VENV)/bin/python demos/bench_bound.py --jerk 5000
-	$(VENV)/bin/python demos/bench_bound.py --jerk 1500 --acceleration 45
 	$(VENV)/bin/python demos/bench_bound.py --descend 0.15 --lift 0.12
 	$(VENV)/bin/python demos/bench_bound.py --descend 0.3 --lift 0.25
 	$(VENV)/bin/python demos/soak.py --preset tracking-fast --boxes 2000
