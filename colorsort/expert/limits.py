@@ -1,9 +1,10 @@
 """How fast each joint of the arm can accelerate: what its actuator's torque limit gives it.
 
 Most makers publish joint speeds, not accelerations; the arm's MJCF gives what sets them, each
-actuator's torque limit [N m] and the links' masses and inertias. At a pose ``q`` a joint moving
-alone accelerates at least at (torque limit - torque holding the arm against gravity - the joint's
-dry friction) / its diagonal entry of the joint-space inertia matrix M(q) (armature included).
+actuator's torque limit [N m] and the links' masses and inertias. At a pose ``q``, at rest, a joint
+driven at its torque limit while the others hold still accelerates at (torque limit - torque holding
+the arm against gravity - the joint's dry friction) / its diagonal entry of the joint-space inertia
+matrix M(q) (armature included); faster if the others give way.
 ``torque_limited_accelerations`` takes the least of that over the poses an expert moves between and
 keeps ``TORQUE_SHARE`` of it: the rest of the torque is left to the position controller's feedback
 and to the other joints' coupling.
