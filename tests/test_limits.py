@@ -36,7 +36,6 @@ def test_each_joint_reaches_its_limit_on_its_actuators_torque_alone(make_env):
             data.qfrc_applied[:n] = applied
             mujoco.mj_forward(model, data)
             assert abs(data.qacc[j]) >= own[j] / TORQUE_SHARE * (1 - 1e-6), (j, q)
-    data.qfrc_applied[:] = 0.0
 
     stopping = make_expert(make_env(preset="default", has_offscreen_renderer=True))
     np.testing.assert_array_equal(stopping.limits.acceleration, np.full(n, 15.0))
