@@ -132,9 +132,10 @@ class Expert:
         """The joint angles [rad] the drop points' IK starts from."""
         raise NotImplementedError
 
-    def slot_distance(self, point: tuple[float, float]) -> float:
-        """How far a release point (x, y) [m] over a bin is from where the expert picks: slots nearest
-        first. Here from the robot's base (the world origin)."""
+    def slot_cost(self, point: tuple[float, float], q: np.ndarray) -> float:
+        """How far a release point (x, y) [m] over a bin, reached at joint angles ``q`` [rad], is from where
+        the expert picks: the slots that cost least are used. Here its distance from the robot's base (the
+        world origin) [m]."""
         return float(np.hypot(*point))
 
     # ------------------------------------------------------------------ the loop
@@ -210,7 +211,7 @@ class Expert:
         return not sealed(obs) and self.time - self.phase_started >= self.config.release_time
 
     def _drop_slots(self, color: str, index: int) -> list[np.ndarray]:
-        """Joint angles of up to ``drop_slots`` release points over a bin, nearest the robot first.
+        """Joint angles of up to ``drop_slots`` release points over a bin, the least ``slot_cost`` first.
 
         Candidates lie on a grid inside the bin, far enough from its walls for a box of any yaw;
         those the arm cannot reach are skipped (the Panda reaches less far than the IRB 140).
@@ -221,15 +222,14 @@ class Expert:
         hx, hy = L.bin_size[0] / 2 - margin, L.bin_size[1] / 2 - margin
         z = L.bin_size[2] + cfg.drop_clearance + L.box_size
         grid = [(bx + dx, by + dy) for dx in np.linspace(-hx, hx, 4) for dy in np.linspace(-hy, hy, 3)]
-        grid.sort(key=self.slot_distance)
-        slots = []
-        for x, y in grid:
+        reachable = []
+        for point in grid:
             try:
-                slots.append(self.ik.solve(Waypoint(f"{color} bin drop", (x, y, z), self.cup_yaw), self.drop_seed()))
+                q = self.ik.solve(Waypoint(f"{color} bin drop", (*point, z), self.cup_yaw), self.drop_seed())
             except UnreachableWaypoint:
                 continue
-            if len(slots) == cfg.drop_slots:
-                return slots
-        if not slots:
+            reachable.append((self.slot_cost(point, q), q))
+        if not reachable:
             raise UnreachableWaypoint(f"No drop point over the {color} bin is within the arm's reach")
-        return slots
+        reachable.sort(key=lambda slot: slot[0])  # stable: equal costs keep the grid's order
+        return [q for _, q in reachable[: cfg.drop_slots]]

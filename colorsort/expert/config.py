@@ -41,6 +41,9 @@ class ExpertConfig:
         feed_forward_acceleration: lead the joint targets by the reference's acceleration times the
             controller's compliance (1 / kp) as well as by its speed times kd / kp, so that the arm keeps to
             its reference when it accelerates hard instead of lagging up to acceleration / kp behind it.
+        wait_over_bin: on a tracking belt, when no box can be met yet after a release, wait over the bin
+            instead of at the wait pose: the way to the next box is then one motion, from rest over the bin to
+            over the box moving with it, instead of two (to rest at the wait pose, then on to the box).
         turn_to_box: turn the cup to the box's yaw as seen by the sensor; False keeps the cup at its home
             yaw over every box (the 60 mm pad seals on a cube turned any way), so a turned box's demo moves
             the wrist as an unturned one's does.
@@ -67,6 +70,7 @@ class ExpertConfig:
     track_lift_gap: float = 0.05
     track_carry_at: float = 1.0
     feed_forward_acceleration: bool = False
+    wait_over_bin: bool = False
     turn_to_box: bool = True
 
     def __post_init__(self) -> None:
@@ -93,8 +97,9 @@ STOPPING_EXPERT = ExpertConfig()
 # away), it follows the box down and up faster (demos/bench_tracking.py measures the result), and the
 # carry takes over halfway up, where the lift's acceleration passes through zero as ruckig's starts. It plans
 # at each joint's own acceleration (its maker's, else what its motor gives it: expert/limits.py) and leads its
-# targets by the planned acceleration too, so the arm keeps up with such plans (demos/bench_bound.py: the arm's
-# cycle at 15 rad/s^2 and 150 rad/s^3 on every joint 1.78 s, at these limits 1.29 s, every box placed).
+# targets by the planned acceleration too, so the arm keeps up with such plans. After a release with no box yet
+# within reach it waits over the bin, and it drops into each bin's two quickest slots (a bin holds at most three
+# boxes between emptyings, so two at most land on one spot; demos/soak.py places 2,000 of 2,000).
 TRACKING_EXPERT = ExpertConfig(motion=MotionConfig(acceleration=None, jerk=1500.0), release_time=0.0,
                                track_descend_time=0.10, track_lift_time=0.08, track_carry_at=0.5,
-                               feed_forward_acceleration=True)
+                               feed_forward_acceleration=True, wait_over_bin=True, drop_slots=2)

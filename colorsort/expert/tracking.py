@@ -12,7 +12,9 @@ longer meet within the arm's reach before the belt's end it lets go: it rides of
 
 Phases: ``MOVE_TO_WAIT`` (over the upstream end of the reach window), ``WAIT_FOR_BOX``,
 ``INTERCEPT``, ``TRACK`` (suction on, down, seal, up, moving with the belt), ``MOVE_OVER_BIN``,
-``RELEASE``; after a release it goes straight to the next box it can meet.
+``RELEASE``; after a release it goes straight to the next box it can meet, and when none can be met yet
+it waits over the bin (``wait_over_bin``: the way to the next box is then one motion from rest to the box)
+or at the wait pose.
 """
 
 from __future__ import annotations
@@ -131,14 +133,17 @@ class TrackingExpert(Expert):
         return self.home
 
     def wait_point(self) -> tuple[float, float, float]:
-        """Over the belt at the upstream end of the reach window, as high as a lifted box's top."""
+        """Over the belt centre line 2 cm upstream of the reach window (where the arm still reaches), at the
+        height the cup meets a box: a box is met as it enters the window, so the interception starts from
+        rest behind it and runs the way the belt does instead of turning back to match its speed."""
         L = self.layout
-        return (self.window[1] - 0.02, L.belt_y, L.belt_top_z + L.box_size + self.config.track_lift_gap)
+        return (self.window[1] + 0.01, L.belt_y, L.belt_top_z + L.box_size + self.config.approach_gap)
 
-    def slot_distance(self, point: tuple[float, float]) -> float:
-        """From the middle of the reach window on the belt's centre line: the bins' slots nearest the belt
-        first, which shortens both the carry and the way back to the next box."""
-        return float(np.hypot(point[0] - sum(self.window) / 2, point[1] - self.layout.belt_y))
+    def slot_cost(self, point: tuple[float, float], q: np.ndarray) -> float:
+        """[s] the least time the arm could take between the wait pose, where boxes are met, and the release
+        point ``q`` [rad], its slowest joint at its datasheet speed: the quickest slots first, which shortens
+        both the carry and the way back to the next box."""
+        return float(np.max(np.abs(q - self.q_wait) / np.asarray(self.calibration.max_velocity, float)))
 
     @cached_property
     def window(self) -> tuple[float, float]:
@@ -354,9 +359,13 @@ class TrackingExpert(Expert):
         assert self.current is not None, "a box was carried to the bin"
         self.current.cycle.done_at = self.time
         self.current = None
-        self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
-        self._enter(Phase.MOVE_TO_WAIT)
-        self._intercept_next()  # straight to the next box when one can be met
+        if self._intercept_next():  # straight to the next box when one can be met
+            return
+        if self.config.wait_over_bin:
+            self._enter(Phase.WAIT_FOR_BOX)
+        else:
+            self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
+            self._enter(Phase.MOVE_TO_WAIT)
 
     def _start_from_here(self, goal: np.ndarray, tolerance: float) -> None:
         ref, vel, acc = self._current_state()
