@@ -208,6 +208,19 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
     assert main(["--recipe", "camera-diffusion", "--lr-schedule", "cosine", "--out", str(tmp_path)]) == 2
 
 
+def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(tmp_path):
+    """``--lr``: ACT's rate and its backbone's in the ``lerobot-train`` command, a run folder of its own (a run at
+    another rate is never reused), and a one-line refusal for a policy that keeps LeRobot's rate."""
+    from colorsort.training.stages import train_command
+
+    args = colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--lr", "3e-4"])
+    recipe = get_recipe("camera-snapshot", **colorsort_baseline.overrides(args))
+    cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
+    assert "--policy.optimizer_lr=0.0003" in cmd and "--policy.optimizer_lr_backbone=0.0003" in cmd
+    assert recipe.run_suffix == "-lr0.0003-shift0.1" and get_recipe("camera-snapshot").run_suffix == "-shift0.1"
+    assert colorsort_baseline.main(["--recipe", "camera-diffusion", "--lr", "3e-4", "--out", str(tmp_path)]) == 2
+
+
 def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
     """``image_shift``: LeRobot's own image transforms, one random shift per image, and a run folder of its own."""
     import draccus

@@ -55,6 +55,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--seeds", help="lerobot-train seeds, comma-separated: every set is trained once per seed")
     p.add_argument("--batch-size", type=int)
     p.add_argument("--lr-schedule", help=f"the learning rate over training, one of {list(LR_SCHEDULES)}")
+    p.add_argument("--lr", type=float, help="ACT's learning rate, its backbone's too (the recipe's: 1e-4)")
     p.add_argument("--save-every", type=int, help="updates between learning-curve checkpoints (0: none)")
     p.add_argument("--select-episodes", type=int,
                    help="score the checkpoint that does best on this many validation episodes of each training "
@@ -94,12 +95,16 @@ def overrides(args: argparse.Namespace) -> dict:
         found["cameras"] = () if args.cameras == "none" else tuple(args.cameras.split(","))
     if args.no_turn:
         found["turn_to_box"] = False
-    if args.lr_schedule:
+    if args.lr_schedule or args.lr is not None:
         policy = get_recipe(args.recipe).policy
         if not isinstance(policy, ActSettings):
-            raise ValueError(f"--lr-schedule sets ACT's schedule; recipe {args.recipe!r} trains {policy.name}, "
-                             "which keeps LeRobot's (cosine)")
-        found["policy"] = replace(policy, lr_schedule=args.lr_schedule)
+            raise ValueError(f"--lr and --lr-schedule set ACT's learning rate; recipe {args.recipe!r} trains "
+                             f"{policy.name}, which keeps LeRobot's")
+        if args.lr_schedule:
+            policy = replace(policy, lr_schedule=args.lr_schedule)
+        if args.lr is not None:
+            policy = replace(policy, optimizer_lr=args.lr, optimizer_lr_backbone=args.lr)
+        found["policy"] = policy
     for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",
                 "select_episodes", "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size",
                 "image_shift", "device"):

@@ -10,7 +10,7 @@ sort it as the stopping-belt expert does. Each leg starts where and when the one
 longer meet within the arm's reach before the belt's end it lets go: it rides off the end
 (``rejected`` if it has no bin, ``dropped`` otherwise); ``let_go`` counts them.
 
-Phases: ``MOVE_TO_WAIT`` (over the upstream end of the reach window), ``WAIT_FOR_BOX``,
+Phases: ``MOVE_TO_WAIT`` (just upstream of the reach window), ``WAIT_FOR_BOX``,
 ``INTERCEPT``, ``TRACK`` (suction on, down, seal, up, moving with the belt), ``MOVE_OVER_BIN``,
 ``RELEASE``; after a release it goes straight to the next box it can meet, and when none can be met yet
 it waits over the bin (``wait_over_bin``: the way to the next box is then one motion from rest to the box)
@@ -133,7 +133,7 @@ class TrackingExpert(Expert):
         return self.home
 
     def wait_point(self) -> tuple[float, float, float]:
-        """Over the belt centre line 2 cm upstream of the reach window (where the arm still reaches), at the
+        """Over the belt centre line 1 cm upstream of the reach window (where the arm still reaches), at the
         height the cup meets a box: a box is met as it enters the window, so the interception starts from
         rest behind it and runs the way the belt does instead of turning back to match its speed."""
         L = self.layout

@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 
 LR_SCHEDULES = ("constant", "cosine")
+DEFAULT_LR = 1e-4  # ACT's learning rate here, its backbone's too
 
 
 def _text(value: object) -> str:
@@ -41,8 +42,8 @@ class ActSettings:
     n_action_steps: int = 10  # actions executed open-loop per inference (1 with temporal ensembling)
     temporal_ensemble_coeff: float | None = None  # set: ACT's temporal ensembling (see TRACKING_ACT)
     use_vae: bool = False  # the expert is deterministic: one mode per state, nothing for a latent to explain
-    optimizer_lr: float = 1e-4  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
-    optimizer_lr_backbone: float = 1e-4
+    optimizer_lr: float = DEFAULT_LR  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
+    optimizer_lr_backbone: float = DEFAULT_LR
     pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
     lr_schedule: str = "constant"  # LeRobot's ACT preset; "cosine": warm up, then anneal to 0 at the last update
     warmup_steps: int = 200  # updates of linear warm-up before the cosine [updates]
@@ -73,8 +74,10 @@ class ActSettings:
 
     @property
     def run_suffix(self) -> str:
-        """What sets a run trained under this schedule apart in folder names: ``-cos`` or nothing."""
-        return "" if self.lr_schedule == "constant" else "-cos"
+        """What sets a run trained under this schedule or rate apart in folder names: ``-cos``, ``-lr0.0003``
+        (a rate other than 1e-4), both or nothing."""
+        rate = "" if self.optimizer_lr == DEFAULT_LR else f"-lr{self.optimizer_lr:g}"
+        return ("" if self.lr_schedule == "constant" else "-cos") + rate
 
     def args(self, image_size: int) -> list[str]:
         """``lerobot-train``'s arguments for the policy, its optimizer and its learning-rate schedule.
