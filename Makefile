@@ -67,6 +67,8 @@ bench: $(STAMP)
 	$(VENV)/bin/python demos/bench_bound.py --jerk 5000
 	$(VENV)/bin/python demos/bench_bound.py --descend 0.15 --lift 0.12
 	$(VENV)/bin/python demos/bench_bound.py --descend 0.3 --lift 0.25
+	$(VENV)/bin/python demos/bench_bound.py --drop-slots 4
+	$(VENV)/bin/python demos/bench_bound.py --drop-slots 4 --wait-at-wait-pose
 	$(VENV)/bin/python demos/soak.py --preset tracking-fast --boxes 2000
 	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot Panda --seeds 2 --boxes 10
 	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot UR5e --seeds 2 --boxes 10

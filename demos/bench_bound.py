@@ -1,7 +1,7 @@
 """The tracking expert's cycle against the physical bound: the arm's joint speeds and the cell's geometry.
 
     python demos/bench_bound.py [--preset tracking-fast] [--seeds 10] [--boxes 20] [--jerk 150] [--acceleration 15]
-        [--descend 0.1] [--lift 0.08]
+        [--descend 0.1] [--lift 0.08] [--drop-slots 2] [--wait-at-wait-pose]
 
 Prints, per bin and leg, the shortest cycle (``colorsort.expert.bound``: the box met at the best point
 of the reach window) four ways: three bounds (each leg at the datasheet joint speeds, acceleration
@@ -9,7 +9,8 @@ unlimited; then at rest on the box and over the bin, with the expert's accelerat
 jerk too) and a ruckig reference (every leg rest to rest, with the expert's acceleration and jerk); then the
 expert's measured cycle per phase (the phase times ``colorsort-sort`` reports, on the same preset and seeds,
 from each seed's first interception on, sim seconds per box placed) and the ratio of its active cycle
-(intercept, track, carry, release, and the way back to the wait pose when no box is within reach yet) to
+(intercept, track, carry, release, and the way back: the tracking preset waits over the bin when no box is
+within reach yet and then meets it in one motion; an expert that waits at the wait pose counts the way there) to
 each bound for the same boxes: the bins' cycles weighted by how many of the placed boxes went to each
 (a box's colour is drawn uniformly, but a few seeds' mix is not: the far bin's cycle is 1.6 times the
 near one's). The ratio to the bins' plain mean is printed too. An interception that
@@ -40,6 +41,7 @@ from colorsort.results import recorded
 
 # the expert's phases that a cycle needs: the way back from the bin counts whether it heads for the next box or,
 # none being within reach yet, for the wait pose at the upstream end of the reach window, where boxes come in
+# (an expert that waits over the bin instead meets the next box from there: its interception is the way back)
 ACTIVE = tuple(p.value for p in (TrackingPhase.INTERCEPT, TrackingPhase.TRACK, TrackingPhase.MOVE_OVER_BIN,
                                  TrackingPhase.RELEASE, TrackingPhase.MOVE_TO_WAIT))
 
@@ -61,8 +63,13 @@ def main() -> None:
                    help="the expert's time down onto the moving box [s] (its preset's by default)")
     p.add_argument("--lift", type=float, default=TRACKING_EXPERT.track_lift_time,
                    help="the expert's time lifting the box off the moving belt [s] (its preset's by default)")
+    p.add_argument("--drop-slots", type=int, default=TRACKING_EXPERT.drop_slots,
+                   help="release points per bin, the quickest first (its preset's by default)")
+    p.add_argument("--wait-at-wait-pose", action="store_true",
+                   help="after a release with no box within reach, wait at the wait pose, not over the bin")
     args = p.parse_args()
     config = replace(TRACKING_EXPERT, track_descend_time=args.descend, track_lift_time=args.lift,
+                     drop_slots=args.drop_slots, wait_over_bin=not args.wait_at_wait_pose,
                      motion=replace(TRACKING_EXPERT.motion, acceleration=args.acceleration, jerk=args.jerk))
 
     env = ColorSort(robots="IRB140", preset=args.preset, has_offscreen_renderer=True, use_camera_obs=False,
