@@ -183,3 +183,69 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
                           "| gripped turned 0 to 5 deg | 1 | 0 (0%) | 0 |",
                           "| gripped turned 5 to 15 deg | 1 | 1 (100%) | 0 |",
                           "| gripped turned 15 to 45 deg | 1 | 1 (100%) | 0 |"]
+
+
+
+def _probe_colour_source():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("probe_colour_source", REPO / "demos" / "probe_colour_source.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_colour_probe_repaints_the_box_in_the_snapshot_photo_only():
+    """demos/probe_colour_source.py: while painting, the snapshot photo shows the first box in another bin's colour,
+    the live sensor camera shows it as it is, and the expert (whose colour sensor reads the live camera) still puts
+    it in its own bin; afterwards every box has its own colour again."""
+    from colorsort.benchmark.policies import ExpertPolicy
+
+    probe = _probe_colour_source()
+    with pytest.raises(ValueError, match="one of"):
+        probe.parse_paint("red:red")
+    env = ColorSortGymEnv(get_variant("default"), cameras=("snapshot", "sensor"), image_size=(32, 32))
+    policy, pool = ExpertPolicy(), env.env.plant.pool
+    try:
+        obs, _ = env.reset(seed=0)
+        policy.reset(env, 0)
+        while not pool.in_play():
+            obs, *_ = env.step(policy.act(obs))
+        color = pool.in_play()[0].color
+        shown = BIN_COLORS[(BIN_COLORS.index(color) + 1) % 3]
+        with probe.painted_snapshots(env, color, shown):
+            while not obs["pixels"]["snapshot"].any():
+                obs, *_ = env.step(policy.act(obs))
+            photo, live = obs["pixels"]["snapshot"][8:].astype(int), obs["pixels"]["sensor"][8:].astype(int)
+            while not env.env.events:
+                obs, *_ = env.step(policy.act(obs))
+        restored = {b.color: tuple(pool.model.geom_rgba[pool.geom[b.index]]) for b in pool.in_play()}
+        event = env.env.events[0]
+    finally:
+        env.close()
+
+    def leading(img, a, b):  # pixels (below the red bin's rim) where colour a's channel leads colour b's
+        ca, cb = int(np.argmax(COLORS[a][:3])), int(np.argmax(COLORS[b][:3]))
+        return int(((img[..., ca] - img[..., cb]) > 60).sum())
+
+    assert leading(photo, shown, color) > 20 and leading(photo, color, shown) < 5, (color, shown)  # a few: the cell
+    assert leading(live, color, shown) > 20 and leading(live, shown, color) < 5, (color, shown)
+    assert (event.color, event.outcome.value, event.bin) == (color, "placed", color)
+    assert restored and all(rgba == pytest.approx(COLORS[c]) for c, rgba in restored.items())
+
+
+@pytest.mark.slow
+def test_the_colour_probe_prints_where_a_shipped_snapshot_policys_red_boxes_went(tmp_path):
+    """The probe's command on act-camera-snapshot, one episode (seed 10000 brings a red box first): a row for the
+    photo as it is, whose red boxes all went to the red bin, and one for the repainted photo."""
+    out = subprocess.run([sys.executable, str(REPO / "demos" / "probe_colour_source.py"), "--policy",
+                          str(REPO / "baselines" / "act-camera-snapshot"), "--episodes", "1", "--paint", "red:blue"],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    rows = [line.split(" | ") for line in out.stdout.splitlines() if line.startswith("| ") and "---" not in line]
+    assert [r[0] for r in rows] == ["| snapshot photo", "| as it is", "| red boxes painted blue"]
+    assert rows[1][1] == "1/1" and rows[1][3] == f"red {rows[1][2]} |"
+    refused = subprocess.run([sys.executable, str(REPO / "demos" / "probe_colour_source.py"), "--policy",
+                              str(REPO / "baselines" / "act-camera-snapshot"), "--paint", "red:pink"],
+                             cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and "one of" in refused.stderr
