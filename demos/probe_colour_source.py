@@ -121,7 +121,10 @@ def main() -> None:
     except ValueError as e:
         p.error(str(e))
     seeds = episode_seeds(variant, args.episodes, None)
-    plain = run(args.policy, args.variant, seeds, None)
+    try:
+        plain = run(args.policy, args.variant, seeds, None)
+    except ValueError as e:  # not a checkpoint, or one without the snapshot camera
+        p.error(str(e))
     painted = run(args.policy, args.variant, seeds, (source, shown))
     print(f"{args.policy} on {args.variant}, evaluation seeds {seeds[0]}-{seeds[-1]}: where the {source} boxes went")
     print(f"| snapshot photo | success | {source} boxes | went to |")

@@ -249,3 +249,7 @@ def test_the_colour_probe_prints_where_a_shipped_snapshot_policys_red_boxes_went
                               str(REPO / "baselines" / "act-camera-snapshot"), "--paint", "red:pink"],
                              cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert refused.returncode == 2 and "one of" in refused.stderr
+    blind = subprocess.run([sys.executable, str(REPO / "demos" / "probe_colour_source.py"), "--policy",
+                            str(REPO / "baselines" / "act-state")], cwd=tmp_path, capture_output=True, text=True,
+                           timeout=120)
+    assert blind.returncode == 2 and "does not take the snapshot camera" in blind.stderr
