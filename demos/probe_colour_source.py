@@ -8,10 +8,10 @@ box of the first colour in play is painted the second colour for that photo only
 the live cameras (``sensor``, ``wrist``, ``scene``), the expert's colour sensor and the referee see
 the box as it is. A policy that takes the colour from the photo carries a red box painted blue to
 the blue bin; one that takes it from the wrist camera's view of the held box carries it to the red
-bin; one torn between them, to the bin in the middle. Prints, for the boxes of the first colour,
-the bins they went to, and each variant's success with the photo as it is, on the same evaluation
-seeds. It prints only (no docs/results file): the checkpoints it probes come from
-``colorsort-baseline`` runs, not from ``make bench``.
+bin; one torn between them, to the bin in the middle. The episodes run as ``colorsort-eval`` runs
+them; prints, with the photo as it is and painted, on the same evaluation seeds, how many episodes
+succeeded and where the boxes of the first colour went. It prints only (no docs/results file): the
+checkpoints it probes come from ``colorsort-baseline`` runs, not from ``make bench``.
 """
 
 from __future__ import annotations
@@ -20,13 +20,12 @@ import argparse
 import os
 from collections import Counter
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-from colorsort.benchmark.evaluate import episode_seeds, observation_settings  # noqa: E402
+from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, episode_seeds, observation_settings  # noqa: E402
 from colorsort.benchmark.gym_env import ColorSortGymEnv  # noqa: E402
-from colorsort.benchmark.policies import make_policy  # noqa: E402
 from colorsort.cell.boxes import BoxStatus  # noqa: E402
 from colorsort.cell.snapshot import SNAPSHOT  # noqa: E402
 from colorsort.config import BIN_COLORS, COLORS  # noqa: E402
@@ -67,37 +66,23 @@ def painted_snapshots(env: ColorSortGymEnv, source: str, shown: str) -> Iterator
 
 
 def run(policy_spec: str, variant_name: str, seeds: list[int], paint: tuple[str, str] | None) -> list[dict]:
-    """Each episode's boxes (colour, outcome, bin) with the snapshot painted as ``paint`` says, or not."""
+    """``colorsort-eval``'s result of each episode (its boxes' colour, outcome and bin) with the snapshot
+    painted as ``paint`` says, or as it is."""
     cameras, size = observation_settings(policy_spec, None, None)
     if SNAPSHOT not in cameras:
         raise ValueError(f"{policy_spec} does not take the snapshot camera (its cameras: {list(cameras)})")
-    env = ColorSortGymEnv(get_variant(variant_name), cameras=cameras, image_size=size)
-    policy = make_policy(policy_spec)
-    episodes = []
+    runner = EpisodeRunner(EvalSettings(policy_spec, variant_name, size, cameras))
     try:
-        for seed in seeds:
-            obs, info = env.reset(seed=seed)
-            policy.reset(env, seed)
-            with painted_snapshots(env, *paint) if paint else _plain():
-                done = False
-                while not done:
-                    obs, _, terminated, truncated, info = env.step(policy.act(obs))
-                    done = terminated or truncated
-            episodes.append({"seed": seed, "success": bool(info["is_success"]),
-                             "boxes": [(e.color, e.outcome.value, e.bin) for e in env.env.events[: env.variant.boxes]]})
+        with painted_snapshots(runner.env, *paint) if paint else nullcontext():
+            return [runner.episode(seed) for seed in seeds]
     finally:
-        env.close()
-    return episodes
-
-
-@contextmanager
-def _plain() -> Iterator[None]:
-    yield
+        runner.close()
 
 
 def bins_of(episodes: list[dict], color: str) -> Counter:
     """Where the boxes of ``color`` went: a bin's colour, or the outcome (dropped, let through) when none."""
-    return Counter(bin_ or outcome for episode in episodes for c, outcome, bin_ in episode["boxes"] if c == color)
+    return Counter(box["bin"] or box["outcome"] for episode in episodes for box in episode["boxes"]
+                   if box["color"] == color)
 
 
 def report(label: str, episodes: list[dict], color: str) -> str:

@@ -121,10 +121,10 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 128
     assert "| default | ACT, sensor+wrist | 1 | 2 steps" in result.stdout
 
-    from colorsort.benchmark.evaluate import EvalSettings, _Runner, observation_settings
+    from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, observation_settings
 
     assert observation_settings(str(model), None, None) == (("sensor", "wrist"), (32, 32))
-    runner = _Runner(EvalSettings(str(model), "default", (32, 32), ("sensor", "wrist"), episode_length=3))
+    runner = EpisodeRunner(EvalSettings(str(model), "default", (32, 32), ("sensor", "wrist"), episode_length=3))
     obs, _ = runner.env.reset(seed=0)
     assert set(obs["pixels"]) == {"sensor", "wrist"} and obs["pixels"]["wrist"].shape == (32, 32, 3)
     runner.close()

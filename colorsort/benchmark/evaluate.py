@@ -56,7 +56,7 @@ class EvalSettings:
 POLICY_THREADS = 1
 
 
-class _Runner:
+class EpisodeRunner:
     """One env and one policy, built once per process, running episodes by seed."""
 
     def __init__(self, settings: EvalSettings):
@@ -137,7 +137,7 @@ class _Stopped(Exception):
 
 def run_job(job: EvalJob, ctx: TaskContext) -> list[dict]:
     """The task: one env and one policy, the job's episodes in seed order; one message per episode."""
-    runner = _Runner(job.settings)
+    runner = EpisodeRunner(job.settings)
     results = []
     try:
         for seed in job.seeds:
