@@ -213,11 +213,12 @@ def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(
     another rate is never reused), and a one-line refusal for a policy that keeps LeRobot's rate."""
     from colorsort.training.stages import train_command
 
-    args = colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--lr", "3e-4"])
-    recipe = get_recipe("camera-snapshot", **colorsort_baseline.overrides(args))
+    args = colorsort_baseline.parse_args(["--recipe", "camera", "--lr", "3e-4"])
+    recipe = get_recipe("camera", **colorsort_baseline.overrides(args))
     cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
     assert "--policy.optimizer_lr=0.0003" in cmd and "--policy.optimizer_lr_backbone=0.0003" in cmd
-    assert recipe.run_suffix == "-lr0.0003-shift0.1" and get_recipe("camera-snapshot").run_suffix == "-shift0.1"
+    assert recipe.run_suffix == "-lr0.0003-shift0.1" and get_recipe("camera").run_suffix == "-shift0.1"
+    assert get_recipe("camera-snapshot").run_suffix == "-lr0.0003-shift0.1"  # the preset's own rate, named too
     assert colorsort_baseline.main(["--recipe", "camera-diffusion", "--lr", "3e-4", "--out", str(tmp_path)]) == 2
 
 
@@ -247,6 +248,42 @@ def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
     for bad in (dict(image_shift=0.5), dict(image_shift=-0.1), dict(image_shift=0.1, cameras=())):
         with pytest.raises(ValueError, match="image_shift"):
             get_recipe("camera", **bad)
+
+
+def test_relit_training_images_vary_as_the_lighting_variant_but_keep_every_box_colour(tmp_path):
+    """``image_relight``: LeRobot's ``ColorJitter`` and ``PlanckianJitter`` on every image beside the shift:
+    darker and brighter, warmer and colder, and a red, green or blue box keeps its strongest channel."""
+    import draccus
+    import torch
+    from lerobot.configs.default import DatasetConfig
+    from lerobot.transforms.transforms import ImageTransforms
+
+    from colorsort.training.stages import train_command
+
+    relit = get_recipe("camera", image_relight=True)
+    args = relit.augment_args()
+    assert relit.run_suffix == "-shift0.1-relit" and "--dataset.image_transforms.max_num_transforms=3" in args
+    assert set(args) <= set(train_command(relit, tmp_path, 10, 1000, tmp_path / "run"))
+    assert get_recipe("camera", image_shift=0, image_relight=True).run_suffix == "-relit"
+    config = draccus.parse(DatasetConfig, args=["--repo_id=local/x", *[a.replace("--dataset.", "--") for a in args]])
+    transforms = ImageTransforms(config.image_transforms)
+    image = torch.full((3, 32, 32), 0.4)  # a grey belt around three saturated boxes
+    for channel, (r, c) in enumerate(((4, 4), (4, 20), (20, 12))):
+        image[:, r:r + 8, c:c + 8] = 0.1
+        image[channel, r:r + 8, c:c + 8] = 0.6
+    torch.manual_seed(0)
+    relit_images = [transforms(image) for _ in range(40)]
+    grey = torch.stack([m[:, 16, 8:24].mean(dim=1) for m in relit_images])  # belt that no 3 px shift moves off
+    assert grey.sum(dim=1).min() < 0.8 * 1.2 < 1.2 * 1.2 < grey.sum(dim=1).max()  # dimmer and brighter than 1.2
+    assert (grey[:, 0] > grey[:, 2] * 1.1).any() and (grey[:, 2] > grey[:, 0] * 1.1).any()  # warm and cold
+    for m in relit_images:
+        for channel, (r, c) in enumerate(((4, 4), (4, 20), (20, 12))):
+            box = m[:, r + 3:r + 5, c + 3:c + 5].mean(dim=(1, 2))  # the middle of the box, inside any shift
+            assert int(box.argmax()) == channel
+    with pytest.raises(ValueError, match="image_relight"):
+        get_recipe("state", image_relight=True)
+    args = colorsort_baseline.parse_args(["--recipe", "camera", "--relight"])
+    assert get_recipe("camera", **colorsort_baseline.overrides(args)).image_relight
 
 
 def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):

@@ -55,7 +55,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--seeds", help="lerobot-train seeds, comma-separated: every set is trained once per seed")
     p.add_argument("--batch-size", type=int)
     p.add_argument("--lr-schedule", help=f"the learning rate over training, one of {list(LR_SCHEDULES)}")
-    p.add_argument("--lr", type=float, help="ACT's learning rate, its backbone's too (the recipe's: 1e-4)")
+    p.add_argument("--lr", type=float,
+                   help="ACT's learning rate, its backbone's too (the recipe's: 1e-4, camera-snapshot's 3e-4)")
     p.add_argument("--save-every", type=int, help="updates between learning-curve checkpoints (0: none)")
     p.add_argument("--select-episodes", type=int,
                    help="score the checkpoint that does best on this many validation episodes of each training "
@@ -69,6 +70,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--image-size", type=int, help="camera images [px], square")
     p.add_argument("--image-shift", type=float, help="random shifts of training images, up to this fraction "
                                                      "of their size (0: off)")
+    p.add_argument("--relight", action="store_true", default=None,
+                   help="relight every training image at random as the lighting variant does "
+                        "(brightness, warm to cold)")
     p.add_argument("--device", help="lerobot-train's device: cpu, cuda or mps")
     p.add_argument("--workers", type=int, default=2, help="collection processes")
     p.add_argument("--envs", type=int, default=2, help="evaluation processes")
@@ -110,6 +114,8 @@ def overrides(args: argparse.Namespace) -> dict:
                 "image_shift", "device"):
         if getattr(args, key) is not None:
             found[key] = getattr(args, key)
+    if args.relight:
+        found["image_relight"] = True
     return found
 
 

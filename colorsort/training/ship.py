@@ -60,6 +60,8 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     backbone = ", its ResNet-18 trained from scratch (no pretrained weights)" if recipe.cameras else ""
     if recipe.image_shift:
         backbone += f", every training image shifted at random by up to {recipe.image_shift:g} of its size"
+    if recipe.image_relight:
+        backbone += ", every training image relit at random (brightness x0.5-1.6, 4,500-12,000 K)"
     curve = ""
     if results.get("curve"):
         curve = (f"\nLearning curve on `{recipe.main_variant}` (each checkpoint on the first {recipe.curve_episodes} "
