@@ -163,6 +163,32 @@ def test_outcomes_by_pose_counts_each_band(tmp_path):
                         "| offset 0 to 2.5 cm | 2 | 1 (50%) | 1 |", "| offset 2.5 to 5 cm | 1 | 1 (100%) | 0 |"]
 
 
+def test_outcomes_by_lights_bands_episodes_by_the_lights_their_cameras_saw(tmp_path, closing):
+    """demos/outcomes_by_lights.py: `lighting` seeds 10008 and 10001 fall in the dimmest and brightest bands, and
+    the sensor camera sees them so (its image at 10008 under half as bright as at 10001); a mix of variants is
+    refused."""
+    episodes = [{"seed": 10008, "success": False, "misplaced": 0, "dropped": 1},
+                {"seed": 10001, "success": True, "misplaced": 0, "dropped": 0},
+                {"seed": 10001, "success": False, "misplaced": 1, "dropped": 0}]
+    (tmp_path / "a.json").write_text(json.dumps({"variant": "lighting", "per_episode": episodes[:2]}))
+    (tmp_path / "b.json").write_text(json.dumps({"variant": "lighting", "per_episode": episodes[2:]}))
+    (tmp_path / "c.json").write_text(json.dumps({"variant": "default", "per_episode": episodes[:1]}))
+    script = str(REPO / "demos" / "outcomes_by_lights.py")
+    out = subprocess.run([sys.executable, script, "a.json", "b.json"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines()[3:] == ["| brightness 0.5 to 0.65 | 1 | 0 (0%) | 0 | 1 |",
+                                           "| brightness 0.65 to 0.8 | 0 | 0 (-) | 0 | 0 |",
+                                           "| brightness 0.8 to 1 | 0 | 0 (-) | 0 | 0 |",
+                                           "| brightness 1 to 1.6 | 2 | 1 (50%) | 1 | 0 |"]
+    mixed = subprocess.run([sys.executable, script, "a.json", "c.json"], cwd=tmp_path, capture_output=True,
+                           text=True, timeout=60)
+    assert mixed.returncode != 0 and "one variant" in mixed.stderr
+    env = closing(ColorSortGymEnv("lighting", cameras=("sensor",), image_size=(32, 32)))
+    dim, bright = (env.reset(seed=s)[0]["pixels"]["sensor"].astype(float).mean() for s in (10008, 10001))
+    assert dim < 0.5 * bright
+
+
 def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
     """With grips recorded, boxes never picked are left out of the grip bands; |grip yaw| either way."""
     boxes = [{"outcome": "placed", "offset": 0.0, "yaw": 0.0, "grip_offset": 0.002, "grip_yaw": 1.0},
