@@ -2,11 +2,13 @@
 
     colorsort-eval --policy baselines/act-camera-snapshot --variant lighting --episodes 20 --json outputs/lights.json
     python demos/outcomes_by_lights.py outputs/lights.json
+    python demos/outcomes_by_lights.py --demos outputs/baselines/camera-snapshot/data/lighting-8-late100
 
 Every episode of the ``lighting`` variant draws its lights from its seed (``Variant.lighting``: brightness
 x0.5-1.6 of the cell's, a tint from warm to cold). This replays each episode's reset, without rendering, to
 read the lights it drew, and prints per band of brightness how many episodes there were, how many succeeded,
-and how many boxes went into a wrong bin or were dropped.
+and how many boxes went into a wrong bin or were dropped. ``--demos ROOT`` prints instead the brightness each
+episode of a ``colorsort-collect`` dataset was recorded under (its seeds are the collection's seed + episode).
 """
 
 from __future__ import annotations
@@ -46,10 +48,25 @@ def rows(episodes: list[dict], lights: dict[int, Lighting]) -> list[str]:
     return out
 
 
+def demo_brightness(root: Path) -> list[float]:
+    """The brightness of each kept episode of a ``colorsort-collect`` dataset, in episode order."""
+    settings = json.loads((root / "meta" / "colorsort.json").read_text())
+    seeds = [settings["settings"]["seed"] + i for i in settings["episodes"]]
+    lights = episode_lights(settings["settings"]["variant"], seeds)
+    return [lights[s].brightness for s in seeds]
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("evals", nargs="+", type=Path, help="colorsort-eval --json files")
+    p.add_argument("evals", nargs="*", type=Path, help="colorsort-eval --json files")
+    p.add_argument("--demos", type=Path, help="a colorsort-collect dataset: the brightness of each episode")
     args = p.parse_args()
+    if args.demos is not None:
+        values = demo_brightness(args.demos)
+        print(f"{len(values)} episodes of {args.demos}, brightness: {', '.join(f'{b:.2f}' for b in values)}")
+        return
+    if not args.evals:
+        p.error("give colorsort-eval --json files, or --demos ROOT")
     runs = [json.loads(f.read_text()) for f in args.evals]
     variants = {r["variant"] for r in runs}
     if len(variants) != 1:

@@ -184,6 +184,14 @@ def test_outcomes_by_lights_bands_episodes_by_the_lights_their_cameras_saw(tmp_p
     mixed = subprocess.run([sys.executable, script, "a.json", "c.json"], cwd=tmp_path, capture_output=True,
                            text=True, timeout=60)
     assert mixed.returncode != 0 and "one variant" in mixed.stderr
+    (tmp_path / "demos" / "meta").mkdir(parents=True)  # a collection from seed 10000 that kept episodes 1 and 8
+    (tmp_path / "demos" / "meta" / "colorsort.json").write_text(json.dumps(
+        {"settings": {"variant": "lighting", "seed": 10000}, "episodes": [1, 8]}))
+    demos = subprocess.run([sys.executable, script, "--demos", "demos"], cwd=tmp_path, capture_output=True,
+                           text=True, timeout=120)
+    assert demos.returncode == 0, demos.stderr
+    first, second = map(float, demos.stdout.split("brightness: ")[1].split(", "))
+    assert first >= 1.0 and 0.5 <= second < 0.65  # the bands above put these seeds in the brightest and dimmest
     env = closing(ColorSortGymEnv("lighting", cameras=("sensor",), image_size=(32, 32)))
     dim, bright = (env.reset(seed=s)[0]["pixels"]["sensor"].astype(float).mean() for s in (10008, 10001))
     assert dim < 0.5 * bright
