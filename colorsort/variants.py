@@ -22,6 +22,8 @@ EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collec
 # for choosing among a training run's checkpoints (``colorsort.training.selection``): never scored, never collected
 VALIDATION_SEEDS: tuple[int, ...] = tuple(range(20_000, 20_050))
 
+LIGHT_BRIGHTNESS = (0.5, 1.6)  # the ``lighting`` variant's range of light intensity, x the cell's own
+
 
 @dataclass(frozen=True)
 class Variant:
@@ -76,7 +78,7 @@ class Variant:
         warm, cold = np.array([1.0, 0.8, 0.6]), np.array([0.7, 0.85, 1.0])
         mix = rng.uniform()
         r, g, b = ((1 - mix) * warm + mix * cold).tolist()
-        return Lighting(brightness=float(rng.uniform(0.5, 1.6)), tint=(r, g, b))
+        return Lighting(brightness=float(rng.uniform(*LIGHT_BRIGHTNESS)), tint=(r, g, b))
 
 
 VARIANTS: dict[str, Variant] = {v.name: v for v in (

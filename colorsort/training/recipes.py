@@ -30,9 +30,9 @@ import json
 from dataclasses import dataclass, replace
 
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SMALL_DIFFUSION, TRACKING_ACT, PolicySettings
+from colorsort.variants import LIGHT_BRIGHTNESS
 
-# the ``lighting`` variant's range of brightness (x) and its warm-to-cold tints as colour temperatures [K]
-RELIGHT_BRIGHTNESS = (0.5, 1.6)
+# the ``lighting`` variant's warm-to-cold tints as colour temperatures [K] (its brightness: LIGHT_BRIGHTNESS)
 RELIGHT_TEMPERATURE = (4500, 12000)
 IRB140_VARIANTS = ("seed", "default", "fast", "jitter", "lighting", "distractors")
 TRACKING_VARIANTS = ("tracking", "tracking-jitter", "tracking-fast")
@@ -218,7 +218,7 @@ class Recipe:
                             "kwargs": {"degrees": 0, "translate": [self.image_shift, self.image_shift]}}
         if self.image_relight:
             tfs["brightness"] = {"weight": 1.0, "type": "ColorJitter",
-                                 "kwargs": {"brightness": list(RELIGHT_BRIGHTNESS)}}
+                                 "kwargs": {"brightness": list(LIGHT_BRIGHTNESS)}}
             tfs["temperature"] = {"weight": 1.0, "type": "PlanckianJitter",
                                   "kwargs": {"temperature": list(RELIGHT_TEMPERATURE)}}
         if not tfs:

@@ -9,9 +9,9 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from colorsort.training.recipes import Recipe
+from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
 from colorsort.training.report import curve_table, summary_table, table, validation_table
-from colorsort.variants import VALIDATION_SEEDS, get_variant
+from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
 
 
 def commit(shipped: Path | None = None) -> str:
@@ -61,7 +61,8 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     if recipe.image_shift:
         backbone += f", every training image shifted at random by up to {recipe.image_shift:g} of its size"
     if recipe.image_relight:
-        backbone += ", every training image relit at random (brightness x0.5-1.6, 4,500-12,000 K)"
+        (b_lo, b_hi), (t_lo, t_hi) = LIGHT_BRIGHTNESS, RELIGHT_TEMPERATURE
+        backbone += f", every training image relit at random (brightness x{b_lo:g}-{b_hi:g}, {t_lo:,}-{t_hi:,} K)"
     curve = ""
     if results.get("curve"):
         curve = (f"\nLearning curve on `{recipe.main_variant}` (each checkpoint on the first {recipe.curve_episodes} "
