@@ -71,14 +71,18 @@ class Variant:
         """[s] sim time after which an episode is truncated: a slow but working policy never gets there."""
         return sorting_time_limit(self.boxes, self.task_config)
 
-    def lighting(self, rng: np.random.Generator) -> Lighting:
-        """This episode's lights, drawn from ``rng`` (plain lights unless ``random_lights``)."""
+    def lighting(self, rng: np.random.Generator, brightness: tuple[float, float] | None = None) -> Lighting:
+        """This episode's lights, drawn from ``rng`` (plain lights unless ``random_lights``).
+
+        ``brightness`` [x the cell's light] replaces ``LIGHT_BRIGHTNESS`` as the range drawn from (demos
+        collected under dimmer or brighter lights than the variant's): the same draws, so episode i's box
+        stream and light colour stay those of the variant's episode i."""
         if not self.random_lights:
             return Lighting()
         warm, cold = np.array([1.0, 0.8, 0.6]), np.array([0.7, 0.85, 1.0])
         mix = rng.uniform()
         r, g, b = ((1 - mix) * warm + mix * cold).tolist()
-        return Lighting(brightness=float(rng.uniform(*LIGHT_BRIGHTNESS)), tint=(r, g, b))
+        return Lighting(brightness=float(rng.uniform(*(brightness or LIGHT_BRIGHTNESS))), tint=(r, g, b))
 
 
 VARIANTS: dict[str, Variant] = {v.name: v for v in (

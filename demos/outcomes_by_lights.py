@@ -8,27 +8,33 @@ Every episode of the ``lighting`` variant draws its lights from its seed (``Vari
 x0.5-1.6 of the cell's, a tint from warm to cold). This replays each episode's reset, without rendering, to
 read the lights it drew, and prints per band of brightness how many episodes there were, how many succeeded,
 and how many boxes went into a wrong bin or were dropped. ``--demos ROOT`` prints instead the brightness each
-episode of a ``colorsort-collect`` dataset was recorded under (its seeds are the collection's seed + episode).
+episode of a ``colorsort-collect`` dataset was recorded under (its seeds are the collection's seed + episode,
+its range the collection's ``--brightness`` where given).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from functools import partial
 from pathlib import Path
 
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.config import Lighting
+from colorsort.variants import get_variant
 
 BRIGHTNESS_BANDS = ((0.5, 0.65), (0.65, 0.8), (0.8, 1.0), (1.0, 1.6))  # x the cell's own lights
 
 
-def episode_lights(variant: str, seeds: list[int]) -> dict[int, Lighting]:
-    """The lights each evaluation seed of ``variant`` draws at reset (no cameras rendered)."""
+def episode_lights(variant: str, seeds: list[int],
+                   brightness: tuple[float, float] | None = None) -> dict[int, Lighting]:
+    """The lights each seed of ``variant`` draws at reset (no cameras rendered); ``brightness``: the
+    range a collection's ``--brightness`` drew from instead of the variant's."""
     env = ColorSortGymEnv(variant, cameras=())
+    draw = partial(get_variant(variant).lighting, brightness=brightness)
     lights = {}
     for seed in seeds:
-        env.reset(seed=seed)
+        env.env.reset(seed=seed, lighting=draw)  # as the gym env's reset, and the collector's
         lights[seed] = env.env.plant.lighting
     env.close()
     return lights
@@ -52,7 +58,8 @@ def demo_brightness(root: Path) -> list[float]:
     """The brightness of each kept episode of a ``colorsort-collect`` dataset, in episode order."""
     settings = json.loads((root / "meta" / "colorsort.json").read_text())
     seeds = [settings["settings"]["seed"] + i for i in settings["episodes"]]
-    lights = episode_lights(settings["settings"]["variant"], seeds)
+    brightness = settings["settings"].get("brightness")  # set when collected with --brightness
+    lights = episode_lights(settings["settings"]["variant"], seeds, tuple(brightness) if brightness else None)
     return [lights[s].brightness for s in seeds]
 
 

@@ -392,6 +392,29 @@ def test_a_recipe_without_the_turn_collects_its_demos_with_no_turn(tmp_path):
     assert size(root) == size(part) and size(root)[0] == 1
 
 
+def test_a_recipe_with_demo_brightness_collects_its_lighting_demos_under_those_lights(tmp_path):
+    """``demo_brightness`` (``--demo-brightness``) reaches colorsort-collect for the random-lights variants
+    alone and names their parts and the set; a mix without one is refused."""
+    from colorsort.training.stages import collect, part_name, size
+
+    args = colorsort_baseline.parse_args(["--demo-brightness", "0.45,0.75"])
+    assert colorsort_baseline.overrides(args) == {"demo_brightness": (0.45, 0.75)}
+    recipe = get_recipe("state", train_mix=(("lighting", 1), ("default", 1)), demos=(2,), boxes_per_episode=1,
+                        late_pass=0, demo_brightness=(0.45, 0.75))
+    assert (part_name(recipe, "lighting", 1), part_name(recipe, "default", 1)) == ("lighting-1-lit0.45-0.75",
+                                                                                  "default-1")
+    root = collect(recipe, 2, tmp_path, workers=1)
+    assert root.name == "demos-2-lit0.45-0.75" and size(root)[0] == 2
+    settings = {p: json.loads((tmp_path / "data" / p / "meta" / "colorsort.json").read_text())["settings"]
+                for p in ("lighting-1-lit0.45-0.75", "default-1")}
+    assert settings["lighting-1-lit0.45-0.75"]["brightness"] == [0.45, 0.75]
+    assert "brightness" not in settings["default-1"]
+    with pytest.raises(ValueError, match="add 'lighting'"):
+        get_recipe("state", demo_brightness=(0.45, 0.75))
+    with pytest.raises(ValueError, match="brightness"):
+        get_recipe("camera-snapshot", demo_brightness=(0.9, 0.5))
+
+
 def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
     from colorsort.cli.baseline import main
 

@@ -14,7 +14,7 @@ from colorsort.benchmark.evaluate import evaluate
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import wilson_interval
 from colorsort.cli.eval import main as eval_main
-from colorsort.config import BIN_COLORS, COLORS
+from colorsort.config import BIN_COLORS, COLORS, Lighting
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
@@ -105,6 +105,16 @@ def test_light_randomisation_never_changes_box_or_bin_colours():
     assert not np.allclose(lights[0], lights[1])  # the lights did change
     env.close()
     assert len(bin_geoms) >= len(BIN_COLORS)
+
+
+def test_a_brightness_range_changes_the_lights_brightness_alone():
+    """``Variant.lighting(rng, brightness)``: the same draws, so the light colour stays the variant's."""
+    variant = VARIANTS["lighting"]
+    for seed in range(5):
+        own, dim = (variant.lighting(np.random.default_rng(seed), b) for b in (None, (0.45, 0.75)))
+        assert own.tint == dim.tint and 0.45 <= dim.brightness <= 0.75 and 0.5 <= own.brightness <= 1.6
+        assert (own.brightness - 0.5) / 1.1 == pytest.approx((dim.brightness - 0.45) / 0.3)  # the same draw
+    assert VARIANTS["default"].lighting(np.random.default_rng(0), (0.45, 0.75)) == Lighting()
 
 
 def test_wilson_interval():

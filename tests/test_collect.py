@@ -33,6 +33,9 @@ def snapshot(root):
     (dict(preset="nope"), "Valid presets"), (dict(robot="KUKA"), "Valid robots"),
     (dict(image_size=(63, 64)), "even"), (dict(workers=0), "valid values"),
     (dict(resume=True, overwrite=True), "not both"),
+    (dict(brightness=(0.5, 0.9)), "lighting"), (dict(variant="jitter", brightness=(0.5, 0.9)), "lighting"),
+    (dict(variant="lighting", brightness=(0.9, 0.5)), "brightness"),
+    (dict(variant="lighting", brightness=(0.01, 0.5)), "brightness"),
 ])
 def test_bad_settings_name_the_valid_choices(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -272,3 +275,29 @@ def test_late_pass_is_off_by_default_and_validated():
         CollectConfig(late_pass=-1)
     with pytest.raises(ValueError, match="late_pass"):
         LatePass(-1)
+
+
+def test_brightness_records_a_lighting_demo_under_the_lights_asked_for(tmp_path):
+    """--brightness LO,HI: the same episode (seed, boxes, light colour) under lights drawn from LO-HI, seen
+    so by the camera, and recorded in the dataset's settings; the variant's own range otherwise."""
+    def first_frame(brightness, name):
+        out = tmp_path / name
+        argv = ["--variant", "lighting", "--episodes", "1", "--boxes-per-episode", "1", "--seed", "3",
+                "--cameras", "sensor", "--image-size", "32", "--out", str(out)]
+        assert main(argv + (["--brightness", brightness] if brightness else [])) == 0
+        settings = json.loads((out / "meta" / "colorsort.json").read_text())["settings"]
+        from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+        frame = LeRobotDataset("local/colorsort", root=out)[0]
+        return settings, frame["observation.images.sensor"].numpy().mean(), frame["observation.state"].numpy()
+
+    (dim_settings, dim, dim_state), (bright_settings, bright, bright_state) = (
+        first_frame("0.45,0.5", "dim"), first_frame("1.5,1.6", "bright"))
+    assert dim_settings["brightness"] == [0.45, 0.5] and bright_settings["brightness"] == [1.5, 1.6]
+    assert dim < 0.6 * bright  # a third of the light, rendered
+    assert np.array_equal(dim_state, bright_state)  # the lights alone differ
+    plain, _, _ = first_frame(None, "plain")
+    assert "brightness" not in plain  # datasets collected without it resume as before
+    with pytest.raises(SystemExit) as stop:
+        main(["--variant", "lighting", "--brightness", "dim", "--out", str(tmp_path / "bad")])
+    assert stop.value.code == 2 and not (tmp_path / "bad").exists()

@@ -32,6 +32,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from colorsort.cli.args import parse_range
 from colorsort.training.pipeline import UNTIL, RunSettings, run_pipeline
 from colorsort.training.policy_settings import LR_SCHEDULES, ActSettings
 from colorsort.training.recipes import RECIPES, get_recipe
@@ -73,6 +74,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--relight", action="store_true", default=None,
                    help="relight every training image at random as the lighting variant does "
                         "(brightness, warm to cold)")
+    p.add_argument("--demo-brightness",
+                   help="LO,HI: the lighting demos collected under lights of this brightness [x the cell's] "
+                        "instead of the variant's 0.5-1.6, e.g. 0.5,0.9 (dim)")
     p.add_argument("--device", help="lerobot-train's device: cpu, cuda or mps")
     p.add_argument("--workers", type=int, default=2, help="collection processes")
     p.add_argument("--envs", type=int, default=2, help="evaluation processes")
@@ -116,6 +120,8 @@ def overrides(args: argparse.Namespace) -> dict:
             found[key] = getattr(args, key)
     if args.relight:
         found["image_relight"] = True
+    if args.demo_brightness:
+        found["demo_brightness"] = parse_range(args.demo_brightness)
     return found
 
 

@@ -29,7 +29,7 @@ import sys
 from tqdm import tqdm
 
 from colorsort.cell.cameras import CAMERAS, parse_cameras
-from colorsort.cli.args import parse_image_size
+from colorsort.cli.args import parse_image_size, parse_range
 from colorsort.config import PRESETS
 from colorsort.data.collect import CollectSummary, collect
 from colorsort.data.config import FPS_CHOICES, VCODECS, CollectConfig
@@ -72,6 +72,9 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--late-pass", type=int, default=d.late_pass,
                         help="hold each belt-pass command back 0..N control steps, storing the expert's action: "
                              "demos of the states a policy reaches when it lets a box through late (default 0: off)")
+    parser.add_argument("--brightness", default=None,
+                        help="LO,HI: a random-lights variant's lights drawn from this brightness range "
+                             "[x the cell's] instead of the variant's own, e.g. 0.5,0.9 for demos under dim lights")
     parser.add_argument("--no-turn", action="store_true",
                         help="the expert keeps the cup at its home yaw over a turned box instead of turning to it")
     parser.add_argument("--resume", action="store_true", help="add the missing episodes to an existing dataset")
@@ -91,7 +94,8 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
             cameras=parse_cameras(args.cameras),
             image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
             executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
-            late_pass=args.late_pass, turn_to_box=not args.no_turn, resume=args.resume, overwrite=args.overwrite)
+            late_pass=args.late_pass, turn_to_box=not args.no_turn, resume=args.resume, overwrite=args.overwrite,
+            brightness=parse_range(args.brightness) if args.brightness else None)
     except ValueError as err:
         parser.error(str(err))  # exits with status 2
         raise

@@ -8,7 +8,7 @@ from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.robots import get_robot
-from colorsort.variants import get_variant
+from colorsort.variants import VARIANTS, get_variant
 
 FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
 VCODECS = ("h264", "libsvtav1", "hevc")
@@ -37,6 +37,9 @@ class CollectConfig:
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
     # [control steps] hold each belt pass back 0..late_pass steps; stored actions stay the expert's (late_pass.py)
     late_pass: int = 0
+    # [x the cell's light] a random-lights variant's brightness drawn from this range instead of its own
+    # (variants.LIGHT_BRIGHTNESS): demos under dimmer lights than the variant's share; None: the variant's
+    brightness: tuple[float, float] | None = None
     turn_to_box: bool = True  # the expert turns the cup to a turned box; False: it keeps its home yaw (ExpertConfig)
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
@@ -64,6 +67,14 @@ class CollectConfig:
         check_range("late_pass", self.late_pass, 0, 100)
         if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
             raise ValueError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
+        if self.brightness is not None:
+            if self.variant is None or not get_variant(self.variant).random_lights:
+                lit = [n for n, v in VARIANTS.items() if v.random_lights]
+                raise ValueError(f"brightness={self.brightness} sets a random-lights variant's range: give "
+                                 f"variant one of {lit} (got {self.variant!r})")
+            low, high = self.brightness
+            check_range("brightness low", low, 0.05, high)
+            check_range("brightness high", high, low, 5.0)
         if self.seed < 0:
             raise ValueError(f"seed={self.seed} must be >= 0")
         if self.resume and self.overwrite:
@@ -76,6 +87,8 @@ class CollectConfig:
         settings = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
         if not self.turn_to_box:  # recorded only when off: datasets from before the option resume as they did
             settings["turn_to_box"] = False
+        if self.brightness is not None:  # likewise recorded only when set
+            settings["brightness"] = list(self.brightness)
         return settings
 
     @property

@@ -11,6 +11,7 @@ import time
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -90,7 +91,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     env = make_recording_env(config)
     expert = make_expert(env, replace(expert_preset(env.config.tracking), turn_to_box=config.turn_to_box))
     late = LatePass(config.late_pass)
-    lighting = get_variant(config.variant).lighting if config.variant else None
+    lighting = partial(get_variant(config.variant).lighting, brightness=config.brightness) if config.variant else None
     out.sim_state = env.sim_state_layout.describe()
     dataset = LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,

@@ -29,8 +29,9 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 
+from colorsort.config import check_range
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SMALL_DIFFUSION, TRACKING_ACT, PolicySettings
-from colorsort.variants import LIGHT_BRIGHTNESS
+from colorsort.variants import LIGHT_BRIGHTNESS, get_variant
 
 # the ``lighting`` variant's warm-to-cold tints as colour temperatures [K] (its brightness: LIGHT_BRIGHTNESS)
 RELIGHT_TEMPERATURE = (4500, 12000)
@@ -59,6 +60,9 @@ class Recipe:
         boxes_per_episode: boxes that leave the belt in one demo.
         boxes_by_variant: (variant, boxes) pairs for training variants whose demos hold another
             number of boxes (``seed`` brings a box every 30 s: one box a demo keeps its idle frames few).
+        demo_brightness: the collector's ``--brightness`` [x the cell's light] for every random-lights
+            training variant (``lighting``): its demos drawn under lights in this range instead of the
+            variant's own ``LIGHT_BRIGHTNESS``; None: the variant's.
         late_pass: the collector's ``--late-pass`` [control steps]: demos that show the states a
             chunking policy reaches when it lets a box through late (``colorsort.data.late_pass``).
         turn_to_box: the expert turns the cup to a turned box in the demos; False: the collector's
@@ -93,6 +97,7 @@ class Recipe:
     demos: tuple[int, ...] = (8, 40, 200)
     boxes_per_episode: int = 3
     boxes_by_variant: tuple[tuple[str, int], ...] = ()
+    demo_brightness: tuple[float, float] | None = None
     late_pass: int = 0
     turn_to_box: bool = True
     steps: int = 6000
@@ -142,6 +147,14 @@ class Recipe:
             raise ValueError(f"image_shift={self.image_shift} shifts camera images: give cameras, or image_shift=0")
         if self.image_relight and not self.cameras:
             raise ValueError("image_relight=True relights camera images: give cameras, or image_relight=False")
+        if self.demo_brightness is not None:
+            lit = [v for v in self.train_variants if get_variant(v).random_lights]
+            if not lit:
+                raise ValueError(f"demo_brightness={self.demo_brightness} sets the lights of random-lights demos, "
+                                 f"and train_mix has none: add 'lighting', or demo_brightness=None")
+            low, high = self.demo_brightness
+            check_range("demo_brightness low", low, 0.05, high)
+            check_range("demo_brightness high", high, low, 5.0)
         if not 0 <= self.late_pass <= 100:
             raise ValueError(f"late_pass={self.late_pass}: give 0 (off) to 100 control steps")
         if self.passes is not None and not self.passes > 0:
@@ -230,6 +243,10 @@ class Recipe:
     def data_suffix(self) -> str:
         """What sets this recipe's demos apart from plain expert demos in folder names."""
         return (f"-late{self.late_pass}" if self.late_pass else "") + ("" if self.turn_to_box else "-noturn")
+
+    def brightness_on(self, variant: str) -> tuple[float, float] | None:
+        """The collector's ``--brightness`` for training variant ``variant``'s demos (None: its own lights)."""
+        return self.demo_brightness if get_variant(variant).random_lights else None
 
     def episodes_on(self, variant: str) -> int:
         return self.eval_episodes if variant == self.main_variant else self.other_episodes

@@ -3,9 +3,11 @@
 Layout of the working folder ``out``::
 
     data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-b<B>: B boxes a demo
-                              where the recipe's boxes_by_variant says so; -late<L>: --late-pass L;
+                              where the recipe's boxes_by_variant says so; -lit<LO>-<HI>: --brightness LO,HI;
+                              -late<L>: --late-pass L;
                               -noturn: --no-turn)
-    data/demos-<N>/           the training set: the parts merged (cameras: box state removed)
+    data/demos-<N>/           the training set: the parts merged (cameras: box state removed; -lit<LO>-<HI>,
+                              -late<L>, -noturn as its parts)
     train/demos-<N>-<S>steps[-cos][-shift<F>]-seed<K>/  lerobot-train's run of S updates with seed K
                               (-cos: cosine learning rate; -shift<F>: images shifted up to F); <run>.json its timing;
                               under a constant rate, the first S updates of a longer run if there is one
@@ -56,7 +58,8 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     Demo i of training variant k has seed ``k * SEED_STRIDE + i``, so a smaller set's parts are the
     first episodes of a larger one's. With cameras the merged set loses ``observation.environment_state``:
     a camera policy must see the boxes, not read them from the simulator."""
-    root = out / "data" / f"demos-{n}{recipe.data_suffix}"
+    lit = f"-lit{recipe.demo_brightness[0]:g}-{recipe.demo_brightness[1]:g}" if recipe.demo_brightness else ""
+    root = out / "data" / f"demos-{n}{lit}{recipe.data_suffix}"
     split = recipe.split(n)
     parts = [out / "data" / part_name(recipe, variant, count) for variant, count in split.items()]
     marker = root / "meta" / "complete"
@@ -68,14 +71,15 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
         print(f"reusing {root}")
         return root
     for k, ((variant, count), part) in enumerate(zip(split.items(), parts, strict=True)):
-        boxes = recipe.boxes(variant)
+        boxes, brightness = recipe.boxes(variant), recipe.brightness_on(variant)
         if not (part / "meta" / "colorsort.json").is_file():
             shutil.rmtree(part, ignore_errors=True)
             run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
                  "--boxes-per-episode", str(boxes), "--seed", str(SEED_STRIDE * k),
                  "--cameras", ",".join(recipe.cameras) or "none", "--image-size", str(recipe.image_size),
                  "--late-pass", str(recipe.late_pass), "--workers", str(workers), "--out", str(part),
-                 "--repo-id", REPO_ID] + ([] if recipe.turn_to_box else ["--no-turn"]),
+                 "--repo-id", REPO_ID] + ([] if recipe.turn_to_box else ["--no-turn"])
+                + (["--brightness", f"{brightness[0]:g},{brightness[1]:g}"] if brightness else []),
                 out / "logs" / f"collect-{part.name}.log")
         else:
             print(f"reusing {part}")
@@ -84,9 +88,11 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
 
 
 def part_name(recipe: Recipe, variant: str, count: int) -> str:
-    """The folder of ``count`` demos of one training variant: ``jitter-8-late100``, ``seed-4-b1-late100``."""
-    boxes = recipe.boxes(variant)
-    return f"{variant}-{count}{'' if boxes == recipe.boxes_per_episode else f'-b{boxes}'}{recipe.data_suffix}"
+    """The folder of ``count`` demos of one training variant: ``jitter-8-late100``, ``seed-4-b1-late100``,
+    ``lighting-8-lit0.5-0.9-late100`` (its lights' brightness drawn from 0.5-0.9)."""
+    boxes, brightness = recipe.boxes(variant), recipe.brightness_on(variant)
+    lit = f"-lit{brightness[0]:g}-{brightness[1]:g}" if brightness else ""
+    return f"{variant}-{count}{'' if boxes == recipe.boxes_per_episode else f'-b{boxes}'}{lit}{recipe.data_suffix}"
 
 
 def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
