@@ -40,6 +40,12 @@ def machine(device: str) -> str:
     return f"a {os.cpu_count()}-core machine, training on {'the CPU' if device == 'cpu' else device}"
 
 
+def lights(recipe: Recipe, variant: str) -> str:
+    """" under lights of brightness x0.45-0.75" where the recipe collects ``variant``'s demos so, else ""."""
+    brightness = recipe.brightness_on(variant)
+    return f" under lights of brightness x{brightness[0]:g}-{brightness[1]:g}" if brightness else ""
+
+
 def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Path, command: str) -> None:
     """Copy ``model`` to ``dest`` with ``scores.json`` (``results``), the plots and a README of how it was made."""
     dest.mkdir(parents=True, exist_ok=True)
@@ -51,7 +57,7 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     every_seed = [r for r in results["rows"] if r["demos_tried"] == recipe.demos[-1]]
     largest = [r for r in every_seed if r["seed"] == recipe.seeds[0]]
     size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
-    mix = ", ".join(f"{c} on {v}" for v, c in recipe.split(recipe.demos[-1]).items())
+    mix = ", ".join(f"{c} on {v}{lights(recipe, v)}" for v, c in recipe.split(recipe.demos[-1]).items())
     inputs = (f"`observation.state` and the cameras {', '.join(recipe.cameras)} at {recipe.image_size} px, never "
               "`observation.environment_state`: the policy sees the boxes" if recipe.cameras else
               "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
