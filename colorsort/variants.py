@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from colorsort.config import COLORS, Lighting, TaskConfig, make_config, sorting_time_limit
+from colorsort.config import COLORS, Lighting, TaskConfig, check_range, make_config, sorting_time_limit
 from colorsort.robots import get_robot
 
 EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
@@ -23,6 +23,14 @@ EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collec
 VALIDATION_SEEDS: tuple[int, ...] = tuple(range(20_000, 20_050))
 
 LIGHT_BRIGHTNESS = (0.5, 1.6)  # the ``lighting`` variant's range of light intensity, x the cell's own
+
+
+def check_brightness(name: str, brightness: tuple[float, float]) -> None:
+    """``ValueError`` naming ``name`` unless ``brightness`` is a range (low <= high) within [0.05, 5] x the
+    cell's light, the range ``Lighting.brightness`` allows."""
+    low, high = brightness
+    check_range(f"{name} low", low, 0.05, high)
+    check_range(f"{name} high", high, low, 5.0)
 
 
 @dataclass(frozen=True)

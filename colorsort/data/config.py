@@ -8,7 +8,7 @@ from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.robots import get_robot
-from colorsort.variants import VARIANTS, get_variant
+from colorsort.variants import VARIANTS, check_brightness, get_variant
 
 FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
 VCODECS = ("h264", "libsvtav1", "hevc")
@@ -72,9 +72,7 @@ class CollectConfig:
                 lit = [n for n, v in VARIANTS.items() if v.random_lights]
                 raise ValueError(f"brightness={self.brightness} sets a random-lights variant's range: give "
                                  f"variant one of {lit} (got {self.variant!r})")
-            low, high = self.brightness
-            check_range("brightness low", low, 0.05, high)
-            check_range("brightness high", high, low, 5.0)
+            check_brightness("brightness", self.brightness)
         if self.seed < 0:
             raise ValueError(f"seed={self.seed} must be >= 0")
         if self.resume and self.overwrite:

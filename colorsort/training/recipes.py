@@ -29,9 +29,8 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 
-from colorsort.config import check_range
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SMALL_DIFFUSION, TRACKING_ACT, PolicySettings
-from colorsort.variants import LIGHT_BRIGHTNESS, get_variant
+from colorsort.variants import LIGHT_BRIGHTNESS, check_brightness, get_variant
 
 # the ``lighting`` variant's warm-to-cold tints as colour temperatures [K] (its brightness: LIGHT_BRIGHTNESS)
 RELIGHT_TEMPERATURE = (4500, 12000)
@@ -152,9 +151,7 @@ class Recipe:
             if not lit:
                 raise ValueError(f"demo_brightness={self.demo_brightness} sets the lights of random-lights demos, "
                                  f"and train_mix has none: add 'lighting', or demo_brightness=None")
-            low, high = self.demo_brightness
-            check_range("demo_brightness low", low, 0.05, high)
-            check_range("demo_brightness high", high, low, 5.0)
+            check_brightness("demo_brightness", self.demo_brightness)
         if not 0 <= self.late_pass <= 100:
             raise ValueError(f"late_pass={self.late_pass}: give 0 (off) to 100 control steps")
         if self.passes is not None and not self.passes > 0:
@@ -248,6 +245,11 @@ class Recipe:
         """The collector's ``--brightness`` for training variant ``variant``'s demos (None: its own lights)."""
         return self.demo_brightness if get_variant(variant).random_lights else None
 
+    @property
+    def lights_suffix(self) -> str:
+        """``-lit<LO>-<HI>`` in the names of demos collected under ``demo_brightness``; "" without it."""
+        return f"-lit{self.demo_brightness[0]:g}-{self.demo_brightness[1]:g}" if self.demo_brightness else ""
+
     def episodes_on(self, variant: str) -> int:
         return self.eval_episodes if variant == self.main_variant else self.other_episodes
 
@@ -275,8 +277,8 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
     # The lighting demos under brightness 0.45-0.75 (--demo-brightness): seed 1001 95% on lighting and every
     # other target met, seed 1000 on the green-bin plateau (17-21 of 50 validation episodes to 6,000 updates).
     # 0.5 s an update against 0.9 with both cameras. 3e-4 (not 1e-4): every seed past the far-bin plateau in
-    # 3,000-4,000 updates.
-    # Each run's checkpoint is chosen on validation seeds (10 episodes of each training variant), as camera-tracking's
+    # 3,000-4,000 updates. Each run's checkpoint is chosen on validation seeds (10 episodes of each training
+    # variant), as camera-tracking's
     Recipe("camera-snapshot", policy=replace(SMALL_ACT, optimizer_lr=3e-4, optimizer_lr_backbone=3e-4),
            cameras=("snapshot",), image_size=32, batch_size=32,
            train_mix=(("default", 1), ("lighting", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)),

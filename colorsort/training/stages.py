@@ -58,8 +58,7 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     Demo i of training variant k has seed ``k * SEED_STRIDE + i``, so a smaller set's parts are the
     first episodes of a larger one's. With cameras the merged set loses ``observation.environment_state``:
     a camera policy must see the boxes, not read them from the simulator."""
-    lit = f"-lit{recipe.demo_brightness[0]:g}-{recipe.demo_brightness[1]:g}" if recipe.demo_brightness else ""
-    root = out / "data" / f"demos-{n}{lit}{recipe.data_suffix}"
+    root = out / "data" / f"demos-{n}{recipe.lights_suffix}{recipe.data_suffix}"
     split = recipe.split(n)
     parts = [out / "data" / part_name(recipe, variant, count) for variant, count in split.items()]
     marker = root / "meta" / "complete"
@@ -90,8 +89,8 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
 def part_name(recipe: Recipe, variant: str, count: int) -> str:
     """The folder of ``count`` demos of one training variant: ``jitter-8-late100``, ``seed-4-b1-late100``,
     ``lighting-8-lit0.5-0.9-late100`` (its lights' brightness drawn from 0.5-0.9)."""
-    boxes, brightness = recipe.boxes(variant), recipe.brightness_on(variant)
-    lit = f"-lit{brightness[0]:g}-{brightness[1]:g}" if brightness else ""
+    boxes = recipe.boxes(variant)
+    lit = recipe.lights_suffix if recipe.brightness_on(variant) else ""
     return f"{variant}-{count}{'' if boxes == recipe.boxes_per_episode else f'-b{boxes}'}{lit}{recipe.data_suffix}"
 
 
