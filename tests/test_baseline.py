@@ -415,6 +415,26 @@ def test_a_recipe_with_demo_brightness_collects_its_lighting_demos_under_those_l
         get_recipe("camera-snapshot", demo_brightness=(0.9, 0.5))
 
 
+def test_a_recipe_with_late_picks_collects_its_demos_with_them(tmp_path):
+    """``late_pick`` (``--late-pick``) reaches colorsort-collect and names the parts and the set; a recipe on a
+    tracking belt, where a held pick would miss its moving box, is refused."""
+    from colorsort.training.stages import collect, size
+
+    args = colorsort_baseline.parse_args(["--late-pick", "30"])
+    assert colorsort_baseline.overrides(args) == {"late_pick": 30}
+    recipe = get_recipe("state", train_mix=(("default", 1),), demos=(1,), boxes_per_episode=1, late_pass=0,
+                        late_pick=5)
+    root = collect(recipe, 1, tmp_path, workers=1)
+    assert root.name == "demos-1-pick5" and size(root)[0] == 1
+    part = tmp_path / "data" / "default-1-pick5"
+    assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["late_pick"] == 5
+    assert get_recipe("camera-snapshot", late_pick=30).data_suffix == "-late100-pick30"
+    with pytest.raises(ValueError, match="tracking belt"):
+        get_recipe("camera-tracking", late_pick=30)
+    with pytest.raises(ValueError, match="late_pick"):
+        get_recipe("camera-snapshot", late_pick=101)
+
+
 def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
     from colorsort.cli.baseline import main
 

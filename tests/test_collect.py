@@ -2,6 +2,9 @@
 
 import json
 import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -16,6 +19,8 @@ from colorsort.data.config import CollectConfig
 from colorsort.data.store import MARKER
 from colorsort.executors.base import chunks
 from colorsort.expert.sorter import SortingExpert
+
+REPO = Path(__file__).resolve().parents[1]
 
 
 def data_table(root):
@@ -262,6 +267,70 @@ def test_late_pass_holds_the_belt_back_and_stores_the_experts_action(tmp_path):
     assert plain_late == 1  # the expert's own let-through: one frame of "box at the ray, belt stopped"
     assert late == 1 + delay  # then `delay` more, each labelled belt-pass
     assert plain_on + delay <= on <= plain_on + delay + 1  # the box clears the ray a step later at most
+
+
+def test_late_pick_holds_the_arm_at_a_picks_start_and_stores_the_experts_approach(tmp_path):
+    """Seed 0 of default starts with a box of a bin colour: with --late-pick the arm stays where it waited for the
+    drawn steps while every stored action is the expert's first approach action, then the expert goes on with
+    its plan unchanged and the box is placed; without, one such frame. The same box either way."""
+    from colorsort.data.late_pick import LatePick
+
+    def waiting_frames(late_pick):
+        out = tmp_path / f"pick{late_pick}"
+        summary = collect(CollectConfig(variant="default", episodes=1, boxes_per_episode=1, seed=0, cameras=(),
+                                        late_pick=late_pick, out=str(out)), progress=False, log=lambda _: None)
+        assert summary.kept == 1  # the box went to its bin
+        table = data_table(out)
+        state, action = np.array(table["observation.state"]), np.array(table["action"])
+        ray, running, suction = state[:, -2] > 0.5, state[:, -1] > 0.5, state[:, -4] > 0.5
+        still = np.abs(state[:, 6:12]).max(axis=1) < 1e-3
+        at_ray = np.flatnonzero(ray & ~running & ~suction & still)
+        return state, action, at_ray, np.array(table["observation.environment_state"])[0]
+
+    drawn = LatePick(9)
+    drawn.reset(0)
+    delay = int(drawn.rng.integers(0, 10))
+    assert delay > 0
+    (state0, action0, plain, box0), (state, action, held, box) = waiting_frames(0), waiting_frames(9)
+    np.testing.assert_array_equal(box, box0)  # the same box, where the plain run had it
+    assert len(plain) == 1  # the expert starts its approach in the step the ray sees the box
+    assert len(held) == 1 + delay and np.all(np.diff(held) == 1)
+    np.testing.assert_array_equal(action[held], np.repeat(action0[plain], len(held), axis=0))  # its approach
+    went = np.abs(state0[plain[0] + delay, :6] - state0[plain[0], :6]).max()  # the expert's arm, as many steps on
+    assert np.abs(state[held[-1], :6] - state[held[0], :6]).max() < min(1e-3, went / 10)  # this one did not go
+    after = held[-1] + 1  # from here on the expert's plan, as if it had started now
+    np.testing.assert_allclose(action[after:after + 20], action0[plain[0] + 1:plain[0] + 21], atol=1e-4)
+    probe = subprocess.run([sys.executable, str(REPO / "demos" / "probe_decisions.py"), str(tmp_path / "pick9"),
+                            str(tmp_path / "pick0")], capture_output=True, text=True, timeout=120)
+    assert probe.returncode == 0, probe.stderr[-2000:]
+    assert probe.stdout.splitlines() == [
+        f"{tmp_path / 'pick9'}: {1 + delay} decision frames: {1 + delay} start a pick, 0 a pass, 0 neither",
+        f"{tmp_path / 'pick0'}: 1 decision frames: 1 start a pick, 0 a pass, 0 neither"]
+
+
+def test_late_pick_is_off_by_default_and_validated(capsys):
+    from colorsort.data.late_pick import LatePick
+
+    class Fixed:  # an expert that is not the stopping-belt one: never held back
+        def act(self, obs):
+            return np.array([0.1, -1.0, -1.0])
+
+    off = LatePick(0)
+    off.reset(0)
+    for _ in range(3):
+        stored, executed = off.act(Fixed(), {})
+        assert stored is executed
+    assert CollectConfig().late_pick == 0 and "late_pick" not in CollectConfig().settings()
+    assert CollectConfig(late_pick=5).settings()["late_pick"] == 5
+    with pytest.raises(ValueError, match="late_pick"):
+        CollectConfig(late_pick=101)
+    with pytest.raises(ValueError, match="late_pick"):
+        LatePick(-1)
+    with pytest.raises(ValueError, match="tracking belt"):
+        CollectConfig(preset="tracking", late_pick=5)
+    with pytest.raises(SystemExit) as stop:
+        main(["--variant", "tracking", "--late-pick", "5", "--episodes", "1"])
+    assert stop.value.code == 2 and "late_pick" in capsys.readouterr().err
 
 
 def test_late_pass_is_off_by_default_and_validated():

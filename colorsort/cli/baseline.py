@@ -48,6 +48,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                                             "VARIANT:WEIGHT (default: the recipe's mix)")
     p.add_argument("--boxes-per-episode", type=int)
     p.add_argument("--late-pass", type=int, help="colorsort-collect's --late-pass for the demos [control steps]")
+    p.add_argument("--late-pick", type=int, help="colorsort-collect's --late-pick for the demos [control steps]")
     p.add_argument("--no-turn", action="store_true",
                    help="demos in which the expert keeps the cup's home yaw over a turned box (colorsort-collect's)")
     p.add_argument("--steps", type=int, help="training updates for the largest set")
@@ -113,9 +114,9 @@ def overrides(args: argparse.Namespace) -> dict:
         if args.lr is not None:
             policy = replace(policy, optimizer_lr=args.lr, optimizer_lr_backbone=args.lr)
         found["policy"] = policy
-    for key in ("boxes_per_episode", "late_pass", "steps", "small_steps", "passes", "batch_size", "save_every",
-                "select_episodes", "eval_episodes", "other_episodes", "curve_episodes", "episode_length", "image_size",
-                "image_shift", "device"):
+    for key in ("boxes_per_episode", "late_pass", "late_pick", "steps", "small_steps", "passes", "batch_size",
+                "save_every", "select_episodes", "eval_episodes", "other_episodes", "curve_episodes", "episode_length",
+                "image_size", "image_shift", "device"):
         if getattr(args, key) is not None:
             found[key] = getattr(args, key)
     if args.relight:

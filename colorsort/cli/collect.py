@@ -72,6 +72,10 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--late-pass", type=int, default=d.late_pass,
                         help="hold each belt-pass command back 0..N control steps, storing the expert's action: "
                              "demos of the states a policy reaches when it lets a box through late (default 0: off)")
+    parser.add_argument("--late-pick", type=int, default=d.late_pick,
+                        help="hold the arm back 0..N control steps each time the expert starts a pick, storing its "
+                             "first approach action: demos of a box waiting at the ray to be picked, as --late-pass's "
+                             "to be let through (stopping belt only; default 0: off)")
     parser.add_argument("--brightness", default=None,
                         help="LO,HI: a random-lights variant's lights drawn from this brightness range "
                              "[x the cell's] instead of the variant's own, e.g. 0.5,0.9 for demos under dim lights")
@@ -94,7 +98,8 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
             cameras=parse_cameras(args.cameras),
             image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
             executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
-            late_pass=args.late_pass, turn_to_box=not args.no_turn, resume=args.resume, overwrite=args.overwrite,
+            late_pass=args.late_pass, late_pick=args.late_pick, turn_to_box=not args.no_turn, resume=args.resume,
+            overwrite=args.overwrite,
             brightness=parse_range(args.brightness) if args.brightness else None)
     except ValueError as err:
         parser.error(str(err))  # exits with status 2

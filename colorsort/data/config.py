@@ -37,6 +37,8 @@ class CollectConfig:
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
     # [control steps] hold each belt pass back 0..late_pass steps; stored actions stay the expert's (late_pass.py)
     late_pass: int = 0
+    # [control steps] hold the arm back 0..late_pick steps at each pick's start (stopping belt; late_pick.py)
+    late_pick: int = 0
     # [x the cell's light] a random-lights variant's brightness drawn from this range instead of its own
     # (variants.LIGHT_BRIGHTNESS): demos under dimmer lights than the variant's share; None: the variant's
     brightness: tuple[float, float] | None = None
@@ -65,6 +67,10 @@ class CollectConfig:
         self.executor_config  # noqa: B018 - validates executor, workers, retries and address
         check_range("shard_size", self.shard_size, 1, 100_000)
         check_range("late_pass", self.late_pass, 0, 100)
+        check_range("late_pick", self.late_pick, 0, 100)
+        if self.late_pick and self.task_config.tracking:
+            raise ValueError(f"late_pick={self.late_pick} holds a pick back on a stopped belt; on a tracking "
+                             "belt the box would move on: give late_pick=0")
         if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
             raise ValueError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
         if self.brightness is not None:
@@ -87,6 +93,8 @@ class CollectConfig:
             settings["turn_to_box"] = False
         if self.brightness is not None:  # likewise recorded only when set
             settings["brightness"] = list(self.brightness)
+        if self.late_pick:  # likewise
+            settings["late_pick"] = self.late_pick
         return settings
 
     @property

@@ -14,13 +14,12 @@ from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
-import numpy as np
-
 from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import judge
 from colorsort.config import sorting_time_limit
 from colorsort.data.config import CollectConfig
 from colorsort.data.late_pass import LatePass
+from colorsort.data.late_pick import LatePick
 from colorsort.data.schema import features, frame, task_text
 from colorsort.executors.base import held_interrupts
 from colorsort.expert.factory import expert_preset, make_expert
@@ -90,7 +89,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     t0 = time.perf_counter()
     env = make_recording_env(config)
     expert = make_expert(env, replace(expert_preset(env.config.tracking), turn_to_box=config.turn_to_box))
-    late = LatePass(config.late_pass)
+    late, pick = LatePass(config.late_pass), LatePick(config.late_pick)
     lighting = partial(get_variant(config.variant).lighting, brightness=config.brightness) if config.variant else None
     out.sim_state = env.sim_state_layout.describe()
     dataset = LeRobotDataset.create(
@@ -108,6 +107,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
             obs = env.reset(seed=seed, lighting=lighting)  # as the benchmark's gym env: same seed, same episode
             expert.reset(obs)
             late.reset(seed)
+            pick.reset(seed)
             first = min(env.boxes_in_play(), key=lambda b: b.serial)
             task = task_text(first.color, k)
             frames = 0
@@ -115,8 +115,10 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                 if stop():
                     raise _Stopped
                 t = time.perf_counter()
-                action = expert.act(obs).astype(np.float32)  # stored as float32: the env consumes exactly that
-                executed = late.executed(action)  # the action itself unless a belt-pass is held back
+                # stored as float32: the env consumes exactly that; the executed action is the stored one
+                # unless a pick's start or a belt-pass is held back
+                action, executed = pick.act(expert, obs)
+                executed = late.executed(executed)
                 t_act = time.perf_counter()
                 dataset.add_frame(frame(env, obs, action, config.cameras, task))
                 t_add = time.perf_counter()

@@ -64,6 +64,9 @@ class Recipe:
             variant's own ``LIGHT_BRIGHTNESS``; None: the variant's.
         late_pass: the collector's ``--late-pass`` [control steps]: demos that show the states a
             chunking policy reaches when it lets a box through late (``colorsort.data.late_pass``).
+        late_pick: the collector's ``--late-pick`` [control steps]: demos that hold the arm back at the
+            start of each pick, so that a box of a bin colour waits at the ray as often as a let-through
+            one does under ``late_pass`` (``colorsort.data.late_pick``); stopping belt only.
         turn_to_box: the expert turns the cup to a turned box in the demos; False: the collector's
             ``--no-turn`` (the cup keeps its home yaw, so turned boxes' demos move the wrist as others do).
         steps: training updates of the largest set.
@@ -98,6 +101,7 @@ class Recipe:
     boxes_by_variant: tuple[tuple[str, int], ...] = ()
     demo_brightness: tuple[float, float] | None = None
     late_pass: int = 0
+    late_pick: int = 0
     turn_to_box: bool = True
     steps: int = 6000
     small_steps: int = 2500
@@ -154,6 +158,11 @@ class Recipe:
             check_brightness("demo_brightness", self.demo_brightness)
         if not 0 <= self.late_pass <= 100:
             raise ValueError(f"late_pass={self.late_pass}: give 0 (off) to 100 control steps")
+        if not 0 <= self.late_pick <= 100:
+            raise ValueError(f"late_pick={self.late_pick}: give 0 (off) to 100 control steps")
+        if self.late_pick and any(get_variant(v).task_config.tracking for v in self.train_variants):
+            raise ValueError(f"late_pick={self.late_pick} holds picks back on a stopped belt; train_mix "
+                             f"{list(self.train_variants)} has a tracking belt: give late_pick=0")
         if self.passes is not None and not self.passes > 0:
             raise ValueError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds) or min(self.seeds) < 0:
@@ -239,7 +248,8 @@ class Recipe:
     @property
     def data_suffix(self) -> str:
         """What sets this recipe's demos apart from plain expert demos in folder names."""
-        return (f"-late{self.late_pass}" if self.late_pass else "") + ("" if self.turn_to_box else "-noturn")
+        return ((f"-late{self.late_pass}" if self.late_pass else "")
+                + (f"-pick{self.late_pick}" if self.late_pick else "") + ("" if self.turn_to_box else "-noturn"))
 
     def brightness_on(self, variant: str) -> tuple[float, float] | None:
         """The collector's ``--brightness`` for training variant ``variant``'s demos (None: its own lights)."""

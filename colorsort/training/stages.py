@@ -4,7 +4,7 @@ Layout of the working folder ``out``::
 
     data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-b<B>: B boxes a demo
                               where the recipe's boxes_by_variant says so; -lit<LO>-<HI>: --brightness LO,HI;
-                              -late<L>: --late-pass L;
+                              -late<L>: --late-pass L; -pick<P>: --late-pick P;
                               -noturn: --no-turn)
     data/demos-<N>/           the training set: the parts merged (cameras: box state removed; -lit<LO>-<HI>,
                               -late<L>, -noturn as its parts)
@@ -76,7 +76,8 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
             run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
                  "--boxes-per-episode", str(boxes), "--seed", str(SEED_STRIDE * k),
                  "--cameras", ",".join(recipe.cameras) or "none", "--image-size", str(recipe.image_size),
-                 "--late-pass", str(recipe.late_pass), "--workers", str(workers), "--out", str(part),
+                 "--late-pass", str(recipe.late_pass), "--late-pick", str(recipe.late_pick),
+                 "--workers", str(workers), "--out", str(part),
                  "--repo-id", REPO_ID] + ([] if recipe.turn_to_box else ["--no-turn"])
                 + (["--brightness", f"{brightness[0]:g},{brightness[1]:g}"] if brightness else []),
                 out / "logs" / f"collect-{part.name}.log")
