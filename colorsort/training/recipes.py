@@ -286,6 +286,8 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
     # dimmer than any demo (relit training images, --relight, held seed 1001 on the plateau: 30% on default).
     # The lighting demos under brightness 0.45-0.75 (--demo-brightness): seed 1001 95% on lighting and every
     # other target met, seed 1000 on the green-bin plateau (17-21 of 50 validation episodes to 6,000 updates).
+    # That plateau is a belt-pass at the ray (demos/probe_decisions.py: 110 labels there start a pick, 1,425 pass);
+    # --late-pick 30 ended it (seeds 1000 and 1001: lighting 100%) and cost fast (40%, 15%): the policies hesitate.
     # 0.5 s an update against 0.9 with both cameras. 3e-4 (not 1e-4): every seed past the far-bin plateau in
     # 3,000-4,000 updates. Each run's checkpoint is chosen on validation seeds (10 episodes of each training
     # variant), as camera-tracking's
