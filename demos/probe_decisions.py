@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import json
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +27,6 @@ def decision_counts(root: Path, horizon: int = 10) -> dict[str, int]:
     """{"decision": frames at the ray with the arm still, "pass": those followed by belt-pass, "pick": by
     an arm motion, "neither"} of the LeRobot dataset at ``root`` (its ``observation.state`` names the
     ray, belt, suction and joint velocities)."""
-    import json
-
     import pandas as pd
 
     info = json.loads((root / "meta" / "info.json").read_text())

@@ -12,6 +12,17 @@ from colorsort.variants import VARIANTS, check_brightness, get_variant
 
 FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
 VCODECS = ("h264", "libsvtav1", "hevc")
+MAX_LATE_PICK = 100  # [control steps] the longest hold asked for (late_pick.py; 5 s at 20 Hz)
+
+
+def check_late_pick(steps: int, tracking: bool) -> None:
+    """``ValueError`` unless ``steps`` [control steps] is 0 (off) to ``MAX_LATE_PICK``, and 0 on a tracking belt
+    (``tracking``), where a held pick's box would move on."""
+    if not 0 <= steps <= MAX_LATE_PICK:
+        raise ValueError(f"late_pick={steps}: give 0 (off) to {MAX_LATE_PICK} control steps")
+    if steps and tracking:
+        raise ValueError(f"late_pick={steps} holds a pick back on a stopped belt; on a tracking belt the box "
+                         "would move on: give late_pick=0")
 
 
 @dataclass(frozen=True)
@@ -67,10 +78,7 @@ class CollectConfig:
         self.executor_config  # noqa: B018 - validates executor, workers, retries and address
         check_range("shard_size", self.shard_size, 1, 100_000)
         check_range("late_pass", self.late_pass, 0, 100)
-        check_range("late_pick", self.late_pick, 0, 100)
-        if self.late_pick and self.task_config.tracking:
-            raise ValueError(f"late_pick={self.late_pick} holds a pick back on a stopped belt; on a tracking "
-                             "belt the box would move on: give late_pick=0")
+        check_late_pick(self.late_pick, self.task_config.tracking)
         if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
             raise ValueError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
         if self.brightness is not None:

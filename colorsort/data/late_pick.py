@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from colorsort.data.config import check_late_pick
 from colorsort.expert.base import Expert
 from colorsort.expert.sorter import Phase, SortingExpert
 
@@ -28,8 +29,7 @@ class LatePick:
     """Holds the arm back for 0..``max_steps`` control steps each time the expert starts a pick."""
 
     def __init__(self, max_steps: int):
-        if not 0 <= max_steps <= 100:
-            raise ValueError(f"late_pick={max_steps}: give 0 (off) to 100 control steps")
+        check_late_pick(max_steps, tracking=False)
         self.max_steps = max_steps
         self.rng = np.random.default_rng()
         self.held = 0  # held steps still to come
@@ -51,14 +51,12 @@ class LatePick:
             if self.held == 0:
                 self.last = self.pending
             return self.pending, self.last
-        before = getattr(expert, "phase", None)
+        waiting = self.max_steps > 0 and isinstance(expert, SortingExpert) and expert.phase is not Phase.APPROACH
         action = expert.act(obs).astype(np.float32)
-        starts = (self.max_steps > 0 and isinstance(expert, SortingExpert) and before is not Phase.APPROACH
-                  and expert.phase is Phase.APPROACH and self.last is not None)
-        if starts:
+        last, self.last = self.last, action
+        if waiting and expert.phase is Phase.APPROACH and last is not None:  # this step starts a pick
             self.held = int(self.rng.integers(0, self.max_steps + 1))
-        if starts and self.held > 0:
-            self.pending = action
-            return action, self.last  # type: ignore[return-value]
-        self.last = action
+            if self.held > 0:
+                self.pending, self.last = action, last
+                return action, last
         return action, action

@@ -29,6 +29,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 
+from colorsort.data.config import check_late_pick
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SMALL_DIFFUSION, TRACKING_ACT, PolicySettings
 from colorsort.variants import LIGHT_BRIGHTNESS, check_brightness, get_variant
 
@@ -158,11 +159,7 @@ class Recipe:
             check_brightness("demo_brightness", self.demo_brightness)
         if not 0 <= self.late_pass <= 100:
             raise ValueError(f"late_pass={self.late_pass}: give 0 (off) to 100 control steps")
-        if not 0 <= self.late_pick <= 100:
-            raise ValueError(f"late_pick={self.late_pick}: give 0 (off) to 100 control steps")
-        if self.late_pick and any(get_variant(v).task_config.tracking for v in self.train_variants):
-            raise ValueError(f"late_pick={self.late_pick} holds picks back on a stopped belt; train_mix "
-                             f"{list(self.train_variants)} has a tracking belt: give late_pick=0")
+        check_late_pick(self.late_pick, any(get_variant(v).task_config.tracking for v in self.train_variants))
         if self.passes is not None and not self.passes > 0:
             raise ValueError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds) or min(self.seeds) < 0:
