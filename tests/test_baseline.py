@@ -761,6 +761,15 @@ def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
     assert render({"rows": clean}, "mistakes").endswith("| every variant | 0 | |")
 
 
+def test_a_shipped_readme_says_how_the_demos_were_held_back():
+    """The README's demo line names the recipe's late passes and late picks, and nothing when it has neither."""
+    from colorsort.training.ship import holds
+
+    assert holds(get_recipe("camera-snapshot")) == "; every belt pass held back 0-100 steps, every pick 0-10"
+    assert holds(get_recipe("state", late_pass=0, late_pick=5)) == "; every pick held back 0-5 steps"
+    assert holds(get_recipe("camera-tracking")) == ""
+
+
 def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):
     """Reshipping replaces the tracked files of the folder it ships to: that alone is no uncommitted change."""
     from colorsort.training.ship import commit

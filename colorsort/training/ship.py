@@ -46,6 +46,14 @@ def lights(recipe: Recipe, variant: str) -> str:
     return f" under lights of brightness x{brightness[0]:g}-{brightness[1]:g}" if brightness else ""
 
 
+def holds(recipe: Recipe) -> str:
+    """"; every belt pass held back 0-100 steps, every pick 0-10" for the recipe's late passes and picks, else ""."""
+    held = ([f"every belt pass held back 0-{recipe.late_pass} steps"] if recipe.late_pass else []) + (
+        [f"every pick{'' if recipe.late_pass else ' held back'} 0-{recipe.late_pick}"
+         + ("" if recipe.late_pass else " steps")] if recipe.late_pick else [])
+    return "; " + ", ".join(held) if held else ""
+
+
 def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Path, command: str) -> None:
     """Copy ``model`` to ``dest`` with ``scores.json`` (``results``), the plots and a README of how it was made."""
     dest.mkdir(parents=True, exist_ok=True)
@@ -93,7 +101,7 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
 {size_mb:.1f} MB.
 
 Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results['started']}, on
-{machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {boxes}),
+{machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {boxes}{holds(recipe)}),
 {largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {recipe.batch_size} in
 {largest[0]['train_minutes']:.0f} min of `lerobot-train`{at}. Stages reused from earlier runs of the same command
 count with the time they took then.
