@@ -768,6 +768,29 @@ def test_a_shipped_readme_says_how_the_demos_were_held_back():
     assert holds(get_recipe("camera-snapshot")) == "; every belt pass held back 0-100 steps, every pick 0-10"
     assert holds(get_recipe("state", late_pass=0, late_pick=5)) == "; every pick held back 0-5 steps"
     assert holds(get_recipe("camera-tracking")) == ""
+    assert holds(get_recipe("camera-snapshot")) + ")," in (SHIPPED["act-camera-snapshot"] / "README.md").read_text()
+
+
+def test_first_box_delay_is_the_median_over_the_seeds_both_runs_placed_a_box(tmp_path):
+    """demos/first_box_delay.py: seed 1's first placed box 0.5 s later, seed 2's 1.0 s, seed 3 placed nothing in
+    one run (left out): median 0.75 s over 2 seeds; two runs with no seed in common are refused."""
+    def evaluation(times: dict[int, list[tuple[float, str]]]) -> dict:
+        return {"variant": "default", "mean_cycle_time_s": 4.0, "per_episode": [
+            {"seed": s, "boxes": [{"time": t, "outcome": o} for t, o in boxes]} for s, boxes in times.items()]}
+
+    new = evaluation({1: [(7.5, "placed"), (12.0, "placed")], 2: [(6.0, "dropped"), (9.0, "placed")],
+                      3: [(8.0, "placed")]})
+    old = evaluation({1: [(7.0, "placed")], 2: [(8.0, "placed")], 3: [(8.0, "dropped")]})
+    (tmp_path / "new.json").write_text(json.dumps(new))
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    out = run([sys.executable, str(REPO / "demos" / "first_box_delay.py"), "new.json", "old.json"], tmp_path,
+              timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("first box placed +0.75 s later (median over 2 seeds, default)")
+    (tmp_path / "other.json").write_text(json.dumps(evaluation({9: [(7.0, "placed")]})))
+    refused = run([sys.executable, str(REPO / "demos" / "first_box_delay.py"), "new.json", "other.json"], tmp_path,
+                  timeout=60)
+    assert refused.returncode != 0 and "no evaluation seed where both runs placed a box" in refused.stderr
 
 
 def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):

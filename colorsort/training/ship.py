@@ -48,9 +48,9 @@ def lights(recipe: Recipe, variant: str) -> str:
 
 def holds(recipe: Recipe) -> str:
     """"; every belt pass held back 0-100 steps, every pick 0-10" for the recipe's late passes and picks, else ""."""
-    held = ([f"every belt pass held back 0-{recipe.late_pass} steps"] if recipe.late_pass else []) + (
-        [f"every pick{'' if recipe.late_pass else ' held back'} 0-{recipe.late_pick}"
-         + ("" if recipe.late_pass else " steps")] if recipe.late_pick else [])
+    held = [f"every belt pass held back 0-{recipe.late_pass} steps"] if recipe.late_pass else []
+    if recipe.late_pick:
+        held.append(f"every pick 0-{recipe.late_pick}" if held else f"every pick held back 0-{recipe.late_pick} steps")
     return "; " + ", ".join(held) if held else ""
 
 
