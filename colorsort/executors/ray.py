@@ -4,7 +4,8 @@ the cluster this node belongs to, as on a SLURM allocation that ran ``ray start`
 Each task takes 1 CPU; Ray runs a task again when its worker process or node dies (``max_retries``),
 never on an exception of the task itself. Tasks report through one ``ray.util.queue.Queue``; a
 "start" message per attempt is how retries are counted. Ctrl-C cancels the tasks: a running one
-gets KeyboardInterrupt and returns what it finished. Workers must have colorsort installed, at the
+gets KeyboardInterrupt and returns what it finished; one that has not returned ``cancel_wait_s`` after its
+cancel is killed (``force``) and reported stopped, never ok. Workers must have colorsort installed, at the
 same version, and see the same file system for the paths they are given.
 """
 
@@ -41,8 +42,17 @@ def _entry(task: Task, queue) -> Any:
 
 
 class RayExecutor:
-    def __init__(self, config: ExecutorConfig, env: dict[str, str]):
-        self.config, self.env = config, env
+    """Runs tasks as Ray tasks of 1 CPU each.
+
+    Args:
+        config: the engine's settings (workers, retries, the cluster's address).
+        env: environment variables every worker gets.
+        cancel_wait_s: [s] how long a cancelled task may take to return what it finished before it is killed.
+            On a loaded 2-core machine a cancel took 40 s to reach a task.
+    """
+
+    def __init__(self, config: ExecutorConfig, env: dict[str, str], cancel_wait_s: float = 120.0):
+        self.config, self.env, self.cancel_wait_s = config, env, cancel_wait_s
 
     def run(self, tasks: list[Task], on_message: Callable[[Any], None] = lambda m: None,
             on_done: Callable[[TaskResult], None] = lambda r: None) -> list[TaskResult]:
@@ -92,11 +102,17 @@ class RayExecutor:
                 results[i].stopped = True
             for ref in running:
                 ray.cancel(ref)
-            deadline = time.monotonic() + 120  # a cancelled task finalizes what it recorded
+            deadline = time.monotonic() + self.cancel_wait_s  # a cancelled task finalizes what it recorded
             while running and time.monotonic() < deadline:
                 done, _ = ray.wait(list(running), num_returns=len(running), timeout=1.0)
                 for ref in done:
                     finish(ref)
+            for ref, i in list(running.items()):  # never reached by its cancel: stopped, whatever it was doing
+                ray.cancel(ref, force=True)
+                running.pop(ref)
+                results[i].stopped = True
+                results[i].error = f"{tasks[i].key}: still running {self.cancel_wait_s:g} s after its cancel; killed"
+                on_done(results[i])
         finally:
             drain()
             queue.shutdown()
