@@ -10,6 +10,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
+from colorsort.errors import ConfigError
+
 # Box and bin colours the cell knows, as RGBA in [0, 1]. Red, green and blue have bins.
 COLORS: dict[str, tuple[float, float, float, float]] = {
     "red": (0.85, 0.10, 0.10, 1.0),
@@ -89,15 +91,15 @@ class TaskConfig:
         # that plus two, the pool could end up entirely in bins and the spawner would starve.
         min_pool = len(BIN_COLORS) * (self.bin_capacity - 1) + 2
         if self.pool_size < min_pool:
-            raise ValueError(
+            raise ConfigError(
                 f"pool_size={self.pool_size} is too small for bin_capacity={self.bin_capacity}: "
                 f"valid values lie in [{min_pool}, 64] (3 bins x (capacity - 1) + 2)"
             )
         if isinstance(self.box_colors, str) or not self.box_colors:
-            raise ValueError(f"box_colors must be a non-empty tuple of colours from {sorted(COLORS)}")
+            raise ConfigError(f"box_colors must be a non-empty tuple of colours from {sorted(COLORS)}")
         unknown = [c for c in self.box_colors if c not in COLORS]
         if unknown:
-            raise ValueError(f"Unknown box colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
+            raise ConfigError(f"Unknown box colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
         object.__setattr__(self, "box_colors", tuple(self.box_colors))
 
 
@@ -107,7 +109,7 @@ def check_range(name: str, value: float, low: float, high: float, low_inclusive:
     ok_low = value >= low if low_inclusive else value > low
     if not (ok_low and value <= high):
         bracket = "[" if low_inclusive else "("
-        raise ValueError(f"{name}={value!r} is out of range; valid values lie in {bracket}{low}, {high}]")
+        raise ConfigError(f"{name}={value!r} is out of range; valid values lie in {bracket}{low}, {high}]")
 
 
 PRESETS: dict[str, TaskConfig] = {
@@ -153,10 +155,10 @@ class Lighting:
     def __post_init__(self) -> None:
         check_range("brightness", self.brightness, 0.05, 5.0)
         if len(self.tint) != 3 or not all(0.0 < t <= 1.0 for t in self.tint):
-            raise ValueError(f"tint={self.tint} must be three values in (0, 1]")
+            raise ConfigError(f"tint={self.tint} must be three values in (0, 1]")
         check_range("noise_std", self.noise_std, 0.0, 50.0)
         if not 0.0 <= self.shadow < 1.0:
-            raise ValueError(f"shadow={self.shadow!r} is out of range; valid values lie in [0.0, 1.0)")
+            raise ConfigError(f"shadow={self.shadow!r} is out of range; valid values lie in [0.0, 1.0)")
 
 
 def sorting_time_limit(boxes: int, task: TaskConfig) -> float:
@@ -172,9 +174,9 @@ def make_config(preset: str = "default", **overrides: Any) -> TaskConfig:
         ValueError: unknown preset, unknown field, or an invalid value.
     """
     if preset not in PRESETS:
-        raise ValueError(f"Unknown preset {preset!r}. Valid presets: {sorted(PRESETS)}")
+        raise ConfigError(f"Unknown preset {preset!r}. Valid presets: {sorted(PRESETS)}")
     fields = {f.name for f in dataclasses.fields(TaskConfig)}
     unknown = sorted(set(overrides) - fields)
     if unknown:
-        raise ValueError(f"Unknown config field(s) {unknown}. Valid fields: {sorted(fields)}")
+        raise ConfigError(f"Unknown config field(s) {unknown}. Valid fields: {sorted(fields)}")
     return dataclasses.replace(PRESETS[preset], **overrides)

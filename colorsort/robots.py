@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from colorsort.errors import ConfigError
 from colorsort.paths import asset_path
 
 GRIPPERS: tuple[str, ...] = ("SuctionGripper", "default")
@@ -66,7 +67,7 @@ def _mjcf_attribute(root: ET.Element, xpath: str, name: str, path: str) -> str:
     element = root.find(xpath)
     value = element.get(name) if element is not None else None
     if value is None:
-        raise ValueError(f"{path}: no {xpath} with a {name!r} attribute")
+        raise ConfigError(f"{path}: no {xpath} with a {name!r} attribute")
     return value
 
 
@@ -96,5 +97,5 @@ ROBOTS: dict[str, RobotSpec] = {
 def get_robot(name: str) -> RobotSpec:
     """The spec of robot ``name``; ``ValueError`` naming the valid robots otherwise."""
     if name not in ROBOTS:
-        raise ValueError(f"Unknown robot {name!r}. Valid robots: {list(ROBOTS)}")
+        raise ConfigError(f"Unknown robot {name!r}. Valid robots: {list(ROBOTS)}")
     return ROBOTS[name]

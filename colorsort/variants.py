@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from colorsort.config import COLORS, Lighting, TaskConfig, check_range, make_config, sorting_time_limit
+from colorsort.errors import ConfigError
 from colorsort.robots import get_robot
 
 EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
@@ -117,7 +118,7 @@ DEFAULT_GYM_ID = "colorsort/ColorSort-v0"
 def get_variant(name: str) -> Variant:
     """The variant called ``name``; ValueError naming the valid ones otherwise."""
     if name not in VARIANTS:
-        raise ValueError(f"Unknown variant {name!r}. Valid variants: {list(VARIANTS)}")
+        raise ConfigError(f"Unknown variant {name!r}. Valid variants: {list(VARIANTS)}")
     return VARIANTS[name]
 
 

@@ -93,3 +93,11 @@ def wait_for_box_at_sensor(env: ColorSort, timeout: float = 20.0):
         if info["box_detected"]:
             return min(env.boxes_in_play(), key=lambda b: env.box_pos(b)[0])
     raise AssertionError("no box reached the sensor")
+
+
+def exit_status(main, argv: list[str]) -> int:
+    """A console script's exit status for ``argv``: what ``main`` returns, or argparse's ``SystemExit`` code."""
+    try:
+        return main(argv)
+    except SystemExit as stop:
+        return stop.code

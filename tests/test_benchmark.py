@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from helpers import exit_status
 
 from colorsort.benchmark.evaluate import evaluate
 from colorsort.benchmark.gym_env import ColorSortGymEnv
@@ -63,9 +64,8 @@ def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(capsys
     assert eval_main(["--policy", "random", "--episodes", "2", "--seed", "7", "--envs", "2", "--image-size", "32",
                       "--cameras", "scene"]) == 0
     assert "success rate" in capsys.readouterr().out
-    with pytest.raises(SystemExit) as exit_info:
-        eval_main(["--episodes", "1", "--envs", "0"])
-    assert exit_info.value.code == 2 and "--envs 0: give at least 1" in capsys.readouterr().err
+    assert exit_status(eval_main, ["--episodes", "1", "--envs", "0"]) == 2
+    assert "--envs 0: give at least 1" in capsys.readouterr().err
 
 
 def test_each_box_of_an_episode_says_where_it_was_set_down():

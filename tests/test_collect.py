@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
-from helpers import TINY
+from helpers import TINY, exit_status
 
 from colorsort.cli.args import parse_image_size
 from colorsort.cli.collect import main
@@ -235,9 +235,8 @@ def test_a_variant_records_the_benchmarks_own_episode_for_each_seed(tmp_path):
 
 
 def test_a_variant_and_a_preset_or_robot_are_not_given_together(capsys):
-    with pytest.raises(SystemExit) as stop:
-        main(["--variant", "jitter", "--robot", "Panda"])
-    assert stop.value.code == 2 and "--variant" in capsys.readouterr().err
+    assert exit_status(main, ["--variant", "jitter", "--robot", "Panda"]) == 2
+    assert "--variant" in capsys.readouterr().err
     with pytest.raises(ValueError, match="give the variant alone"):
         CollectConfig(variant="robots-panda")  # robot IRB140 by default, the variant's is Panda
     with pytest.raises(ValueError, match="Valid variants"):
@@ -328,9 +327,8 @@ def test_late_pick_is_off_by_default_and_validated(capsys):
         LatePick(-1)
     with pytest.raises(ValueError, match="tracking belt"):
         CollectConfig(preset="tracking", late_pick=5)
-    with pytest.raises(SystemExit) as stop:
-        main(["--variant", "tracking", "--late-pick", "5", "--episodes", "1"])
-    assert stop.value.code == 2 and "late_pick" in capsys.readouterr().err
+    assert exit_status(main, ["--variant", "tracking", "--late-pick", "5", "--episodes", "1"]) == 2
+    assert "late_pick" in capsys.readouterr().err
 
 
 def test_late_pass_is_off_by_default_and_validated():
@@ -367,6 +365,5 @@ def test_brightness_records_a_lighting_demo_under_the_lights_asked_for(tmp_path)
     assert np.array_equal(dim_state, bright_state)  # the lights alone differ
     plain, _, _ = first_frame(None, "plain")
     assert "brightness" not in plain  # datasets collected without it resume as before
-    with pytest.raises(SystemExit) as stop:
-        main(["--variant", "lighting", "--brightness", "dim", "--out", str(tmp_path / "bad")])
-    assert stop.value.code == 2 and not (tmp_path / "bad").exists()
+    assert exit_status(main, ["--variant", "lighting", "--brightness", "dim", "--out", str(tmp_path / "bad")]) == 2
+    assert not (tmp_path / "bad").exists()

@@ -5,6 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import exit_status
 
 from colorsort.cli.sort import main as sort_main
 from colorsort.expert.config import STOPPING_EXPERT
@@ -127,9 +128,7 @@ def test_sort_cli_writes_the_summary(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv", [["--boxes", "0"], ["--robot", "Sawyer"], ["--preset", "turbo"]])
 def test_sort_cli_bad_arguments_exit_2(argv, capsys):
-    with pytest.raises(SystemExit) as exit_info:
-        sort_main(argv)
-    assert exit_info.value.code == 2
+    assert exit_status(sort_main, argv) == 2
     assert "error" in capsys.readouterr().err
 
 

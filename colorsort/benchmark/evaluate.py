@@ -18,6 +18,7 @@ from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.cell.plant import Grip
+from colorsort.errors import ConfigError, StageError
 from colorsort.executors.base import (
     DEFAULT_SHARD_SIZE,
     ExecutorConfig,
@@ -34,7 +35,7 @@ def episode_seeds(variant: Variant, episodes: int, seed: int | None) -> list[int
     if seed is not None:
         return [seed + k for k in range(episodes)]
     if episodes > len(variant.seeds):
-        raise ValueError(f"variant {variant.name!r} has {len(variant.seeds)} evaluation seeds; "
+        raise ConfigError(f"variant {variant.name!r} has {len(variant.seeds)} evaluation seeds; "
                          f"for {episodes} episodes pass --seed S (seeds S..S+{episodes - 1})")
     return list(variant.seeds[:episodes])
 
@@ -169,7 +170,7 @@ def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(
         bar.close()
     failed = [r for r in results if not r.ok]
     if failed:
-        raise RuntimeError("evaluation stopped: " + "; ".join(r.error or f"{r.key} was stopped" for r in failed))
+        raise StageError("evaluation stopped: " + "; ".join(r.error or f"{r.key} was stopped" for r in failed))
     return [r.value for r in results], sum(r.attempts > 1 for r in results)
 
 
@@ -224,7 +225,7 @@ def evaluate(policy_spec: str, variant_name: str, episodes: int, *, seed: int | 
              executor: ExecutorConfig | None = None, shard_size: int = DEFAULT_SHARD_SIZE) -> EvalReport:
     """``episodes`` episodes of a policy on one variant, on ``envs`` local processes (or ``executor``)."""
     if envs < 1:
-        raise ValueError(f"envs={envs}: give at least 1")
+        raise ConfigError(f"envs={envs}: give at least 1")
     return evaluate_variants(policy_spec, [variant_name], episodes, seed=seed, image_size=image_size, cameras=cameras,
                              progress=progress, episode_length=episode_length,
                              executor=executor or ExecutorConfig(workers=envs), shard_size=shard_size)[0]
@@ -245,8 +246,8 @@ def observation_settings(policy_spec: str, cameras: str | None,
         return (given if given is not None else DEFAULT_CAMERAS), size or DEFAULT_IMAGE_SIZE
     trained, trained_size = checkpoint_cameras(policy_spec)
     if given is not None and set(given) != set(trained):
-        raise ValueError(f"{policy_spec} was trained on cameras {list(trained) or 'none'}; got --cameras {cameras}")
+        raise ConfigError(f"{policy_spec} was trained on cameras {list(trained) or 'none'}; got --cameras {cameras}")
     if size is not None and trained_size is not None and size != trained_size:
-        raise ValueError(f"{policy_spec} was trained on {trained_size[0]}x{trained_size[1]} images; "
+        raise ConfigError(f"{policy_spec} was trained on {trained_size[0]}x{trained_size[1]} images; "
                          f"got --image-size {image_size}")
     return trained, trained_size or size or DEFAULT_IMAGE_SIZE

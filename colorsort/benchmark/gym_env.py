@@ -29,6 +29,7 @@ from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome, judge
 from colorsort.config import is_distractor
 from colorsort.data.schema import ENV_STATE_SIZE, box_state, robot_state, state_size
+from colorsort.errors import ConfigError
 from colorsort.robots import ROBOTS
 from colorsort.variants import Variant, get_variant, gym_ids
 
@@ -60,10 +61,10 @@ class ColorSortGymEnv(gym.Env):
                  episode_length: int | None = None):
         self.variant = get_variant(variant) if isinstance(variant, str) else variant
         if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode={render_mode!r}; valid modes: [None, 'rgb_array']")
+            raise ConfigError(f"render_mode={render_mode!r}; valid modes: [None, 'rgb_array']")
         check_cameras(cameras)
         if episode_length is not None and episode_length < 1:
-            raise ValueError(f"episode_length={episode_length}: give at least 1 step, or None for the variant's limit")
+            raise ConfigError(f"episode_length={episode_length}: give at least 1 step, or None for the variant's limit")
         self.render_mode = render_mode
         self.cameras = tuple(cameras)
         self.image_size = tuple(image_size)

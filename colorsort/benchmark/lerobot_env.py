@@ -23,6 +23,7 @@ from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.data.schema import ENV_STATE_SIZE, state_size
+from colorsort.errors import ConfigError
 from colorsort.robots import ROBOTS
 from colorsort.variants import Variant, get_variant, gym_ids
 
@@ -35,7 +36,7 @@ def variant_of_task(task: str) -> Variant:
     gym_id = f"{NAMESPACE}/{task}"
     if gym_id not in ids:
         valid = sorted(i.removeprefix(f"{NAMESPACE}/") for i in ids)
-        raise ValueError(f"Unknown ColorSort task {task!r}. Valid tasks: {valid}")
+        raise ConfigError(f"Unknown ColorSort task {task!r}. Valid tasks: {valid}")
     return get_variant(ids[gym_id])
 
 
@@ -54,7 +55,7 @@ class ColorSortEnv(EnvConfig):
 
     def __post_init__(self) -> None:
         if self.task is None:
-            raise ValueError("--env.task: give a ColorSort task, e.g. ColorSort-Default-v0 (colorsort-eval --list)")
+            raise ConfigError("--env.task: give a ColorSort task, e.g. ColorSort-Default-v0 (colorsort-eval --list)")
         variant = variant_of_task(self.task)
         n = ROBOTS[variant.robot].n_joints
         self.features = {

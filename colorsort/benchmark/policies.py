@@ -16,6 +16,7 @@ import numpy as np
 
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.data.schema import state_size
+from colorsort.errors import ConfigError
 from colorsort.robots import get_robot
 from colorsort.variants import Variant
 
@@ -73,7 +74,7 @@ class LeRobotPolicy:
 
         path = Path(path)
         if not (path / "config.json").is_file():
-            raise ValueError(f"{path} is not a LeRobot checkpoint (no config.json); expected e.g. "
+            raise ConfigError(f"{path} is not a LeRobot checkpoint (no config.json); expected e.g. "
                              "outputs/train/<run>/checkpoints/last/pretrained_model")
         self.name = str(path)
         config = PreTrainedConfig.from_pretrained(path)
@@ -108,9 +109,9 @@ def check_policy_spec(spec: str) -> None:
     if spec in ("expert", "random"):
         return
     if not Path(spec).exists():
-        raise ValueError(f"Unknown policy {spec!r}: give 'expert', 'random' or a LeRobot checkpoint folder")
+        raise ConfigError(f"Unknown policy {spec!r}: give 'expert', 'random' or a LeRobot checkpoint folder")
     if not (Path(spec) / "config.json").is_file():
-        raise ValueError(f"{spec} is not a LeRobot checkpoint (no config.json); expected e.g. "
+        raise ConfigError(f"{spec} is not a LeRobot checkpoint (no config.json); expected e.g. "
                          "outputs/train/<run>/checkpoints/last/pretrained_model")
 
 
@@ -125,7 +126,7 @@ def checkpoint_cameras(path: str | Path) -> tuple[tuple[str, ...], tuple[int, in
         return (), None
     sizes = {tuple(shape[-2:]) for shape in images.values()}  # (channels, height, width)
     if len(sizes) != 1:
-        raise ValueError(f"{path}: cameras of different sizes {sorted(sizes)}; ColorSort renders one size")
+        raise ConfigError(f"{path}: cameras of different sizes {sorted(sizes)}; ColorSort renders one size")
     (size,) = sizes
     return tuple(images), (int(size[0]), int(size[1]))
 

@@ -18,6 +18,7 @@ from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sorting_time_limit
 from colorsort.data.video import VideoWriter, contact_sheet, draw_lines, save_png
+from colorsort.errors import ConfigError
 from colorsort.expert.base import Expert
 from colorsort.expert.factory import make_expert
 from colorsort.robots import get_robot
@@ -49,7 +50,7 @@ class SortConfig:
 
     def __post_init__(self) -> None:
         if self.preset not in PRESETS:
-            raise ValueError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
+            raise ConfigError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
         get_robot(self.robot)
         check_range("boxes", self.boxes, 1, 10_000)
 

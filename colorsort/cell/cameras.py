@@ -17,6 +17,7 @@ import numpy as np
 from robosuite.utils.observables import sensor
 
 from colorsort.cell.snapshot import SNAPSHOT, SOURCE, Snapshot
+from colorsort.errors import ConfigError
 
 PHYSICAL_CAMERAS: tuple[str, ...] = ("scene", "sensor", "wrist")  # rendered live; an env's cameras by default
 CAMERAS: tuple[str, ...] = (*PHYSICAL_CAMERAS, SNAPSHOT)
@@ -36,7 +37,7 @@ def check_cameras(cameras: list[str] | tuple[str, ...]) -> None:
     """``ValueError`` naming the valid cameras unless every name is one of ``CAMERAS``."""
     unknown = [c for c in cameras if c not in CAMERAS]
     if unknown:
-        raise ValueError(f"Unknown camera(s) {unknown}. Valid cameras: {list(CAMERAS)}")
+        raise ConfigError(f"Unknown camera(s) {unknown}. Valid cameras: {list(CAMERAS)}")
 
 
 def mjcf_name(camera: str) -> str:
@@ -99,7 +100,7 @@ class CameraRenderer:
         check_cameras([camera])
         if camera == SNAPSHOT:
             if depth:
-                raise ValueError("The snapshot camera holds a colour photo, no depth; render 'sensor' for depth")
+                raise ConfigError("The snapshot camera holds a colour photo, no depth; render 'sensor' for depth")
             return self.snapshot.image(width, height)
         start = time.perf_counter()
         name = mjcf_name(camera)

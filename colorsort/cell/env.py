@@ -33,6 +33,7 @@ from colorsort.cell.rendering import check_gl
 from colorsort.cell.sim_state import CellState, SimStateLayout, rng_from_words, rng_to_words
 from colorsort.cell.suction import add_welds
 from colorsort.config import CellLayout, Lighting, TaskConfig, layout_for, make_config
+from colorsort.errors import ActionError, ConfigError
 from colorsort.paths import asset_path
 from colorsort.robots import GRIPPERS, ROBOTS, RobotSpec
 
@@ -77,14 +78,14 @@ class ColorSort(ManipulationEnv):
     ):
         robot_list = [robots] if isinstance(robots, str) else list(robots)
         if len(robot_list) != 1 or robot_list[0] not in ROBOTS:
-            raise ValueError(f"ColorSort takes one robot; got {robots!r}. Valid robots: {list(ROBOTS)}")
+            raise ConfigError(f"ColorSort takes one robot; got {robots!r}. Valid robots: {list(ROBOTS)}")
         if gripper_types not in GRIPPERS:
-            raise ValueError(f"Unknown gripper {gripper_types!r}. Valid grippers: {list(GRIPPERS)}")
+            raise ConfigError(f"Unknown gripper {gripper_types!r}. Valid grippers: {list(GRIPPERS)}")
         if gripper_types == "default" and robot_list[0] != "IRB140":
-            raise ValueError(f"{robot_list[0]}'s default gripper cannot pick 0.1 m boxes; use 'SuctionGripper'")
+            raise ConfigError(f"{robot_list[0]}'s default gripper cannot pick 0.1 m boxes; use 'SuctionGripper'")
         self.config = config if config is not None else make_config(preset, **overrides)
         if config is not None and overrides:
-            raise ValueError("Pass either config or field overrides, not both")
+            raise ConfigError("Pass either config or field overrides, not both")
         self.layout = layout or layout_for(self.config)
         self.robot_spec: RobotSpec = ROBOTS[robot_list[0]]
         cams = [camera_names] if isinstance(camera_names, str) else list(camera_names)
@@ -100,7 +101,7 @@ class ColorSort(ManipulationEnv):
 
         physics_hz = 1.0 / macros.SIMULATION_TIMESTEP
         if servo_freq <= 0 or abs(physics_hz / servo_freq - round(physics_hz / servo_freq)) > 1e-9:
-            raise ValueError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, "
+            raise ConfigError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, "
                              "e.g. 100, 250, 500")
         self._servo_period = int(round(physics_hz / servo_freq))  # physics steps per torque update
         self._substep = 0
@@ -237,7 +238,7 @@ class ColorSort(ManipulationEnv):
     def _create_camera_sensors(self, cam_name, cam_w, cam_h, cam_d, cam_segs, modality="image"):
         """Camera sensors named by their ColorSort alias, images flipped right side up for OpenCV."""
         if cam_segs is not None:
-            raise ValueError("ColorSort cameras do not provide segmentation")
+            raise ConfigError("ColorSort cameras do not provide segmentation")
         return cameras.camera_sensors(self.camera_image, cam_name, cam_w, cam_h, cam_d, modality)
 
     def camera_image(self, camera: str, width: int, height: int, depth: bool = False):
@@ -298,11 +299,11 @@ class ColorSort(ManipulationEnv):
         if policy_step:
             action = np.asarray(action, dtype=float)
             if action.shape != (self.action_dim,):
-                raise ValueError(f"Expected an action of shape ({self.action_dim},), got {action.shape}")
+                raise ActionError(f"Expected an action of shape ({self.action_dim},), got {action.shape}")
             bad = np.flatnonzero(~np.isfinite(action))
             if bad.size:
                 names = self.action_names()
-                raise ValueError("Action elements must be finite; got "
+                raise ActionError("Action elements must be finite; got "
                                  + ", ".join(f"{names[i]} (index {i}) = {action[i]}" for i in bad))
             self._substep = 0
             self._arm_action = action[:-1]

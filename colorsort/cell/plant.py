@@ -20,6 +20,7 @@ from colorsort.cell.lighting import LightRig
 from colorsort.cell.referee import Referee
 from colorsort.cell.suction import VacuumSeal
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, Lighting, TaskConfig
+from colorsort.errors import ConfigError
 
 # The parts of MuJoCo's state that ColorSort changes while it runs.
 MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
@@ -126,7 +127,7 @@ class Plant:
     def put_box(self, color: str, x: float, y: float, yaw: float = 0.0) -> Box:
         """Take a box from the pool and set it down on the belt at (x, y) [m], turned ``yaw`` [rad]."""
         if color not in COLORS:
-            raise ValueError(f"Unknown colour {color!r}. Valid colours: {sorted(COLORS)}")
+            raise ConfigError(f"Unknown colour {color!r}. Valid colours: {sorted(COLORS)}")
         parked = self.pool.parked()
         if not parked:
             raise RuntimeError(f"All {len(self.pool.boxes)} boxes of the pool are in play")

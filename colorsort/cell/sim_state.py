@@ -36,6 +36,7 @@ import mujoco
 import numpy as np
 
 from colorsort.cell.plant import MJ_STATE_SPEC, PlantState
+from colorsort.errors import ConfigError
 
 VERSION = 2  # 2: belt_travel (the belt's encoder) added
 RNG_STATE_SIZE = 10  # a PCG64 generator's state and increment (4 x 32 bits each), then its uint32 buffer
@@ -46,7 +47,7 @@ def rng_to_words(rng: np.random.Generator) -> np.ndarray:
     """A PCG64 generator's full state as 32-bit words (exact in float64)."""
     st = rng.bit_generator.state
     if st["bit_generator"] != "PCG64":
-        raise ValueError(f"Only PCG64 generators can be saved, not {st['bit_generator']}")
+        raise ConfigError(f"Only PCG64 generators can be saved, not {st['bit_generator']}")
     words = [(v >> (32 * k)) & 0xFFFFFFFF for v in (st["state"]["state"], st["state"]["inc"]) for k in range(4)]
     return np.array(words + [st["has_uint32"], st["uinteger"]], dtype=np.float64)
 
@@ -116,7 +117,7 @@ class CellState:
     def unpack(cls, vector: np.ndarray, layout: SimStateLayout) -> CellState:
         vector = np.asarray(vector, dtype=np.float64)
         if vector.shape != (layout.size,):
-            raise ValueError(f"Expected a state of shape ({layout.size},), got {vector.shape}: "
+            raise ConfigError(f"Expected a state of shape ({layout.size},), got {vector.shape}: "
                              "was it saved with another robot or pool size?")
         s = layout.slices
         scalar = {name: vector[s[name]][0] for name in (*PLANT_SCALARS, "clock")}

@@ -14,6 +14,8 @@ import mujoco
 import numpy as np
 from robosuite.utils.mjcf_utils import new_element
 
+from colorsort.errors import ConfigError
+
 SEAL_ANGLE_DEG = 15.0  # max angle between the cup axis and a box face normal to seal
 
 
@@ -66,7 +68,7 @@ class VacuumSeal:
         and the box's turn against the cup about that axis [deg], in [-45, 45) (a cube's side faces repeat
         every 90 deg)."""
         if self.held is None:
-            raise ValueError("no box is sealed to the cup")
+            raise ConfigError("no box is sealed to the cup")
         weld = self.model.eq_data[self.welds[self.held]]
         turn = np.zeros(9)
         mujoco.mju_quat2Mat(turn, weld[6:10])

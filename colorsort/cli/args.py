@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from colorsort.errors import ConfigError
+
 
 def parse_image_size(text: str) -> tuple[int, int]:
     """"128" -> (128, 128); "96x128" -> (96, 128) (height x width)."""
@@ -9,12 +11,12 @@ def parse_image_size(text: str) -> tuple[int, int]:
     try:
         size = tuple(int(p) for p in parts)
     except ValueError:
-        raise ValueError(f"image size {text!r}: give one number (square) or HxW, e.g. 128 or 96x128") from None
+        raise ConfigError(f"image size {text!r}: give one number (square) or HxW, e.g. 128 or 96x128") from None
     if len(size) == 1:
         return size[0], size[0]
     if len(size) == 2:
         return size[0], size[1]
-    raise ValueError(f"image size {text!r}: give one number (square) or HxW, e.g. 128 or 96x128")
+    raise ConfigError(f"image size {text!r}: give one number (square) or HxW, e.g. 128 or 96x128")
 
 
 def parse_range(text: str) -> tuple[float, float]:
@@ -22,5 +24,5 @@ def parse_range(text: str) -> tuple[float, float]:
     try:
         low, high = (float(p) for p in text.split(","))
     except ValueError:
-        raise ValueError(f"range {text!r}: give two numbers, low,high, e.g. 0.5,0.9") from None
+        raise ConfigError(f"range {text!r}: give two numbers, low,high, e.g. 0.5,0.9") from None
     return low, high

@@ -33,6 +33,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from colorsort.cli.args import parse_range
+from colorsort.cli.run import guarded
+from colorsort.errors import ConfigError, DataExistsError
 from colorsort.training.pipeline import UNTIL, RunSettings, run_pipeline
 from colorsort.training.policy_settings import LR_SCHEDULES, ActSettings
 from colorsort.training.recipes import RECIPES, get_recipe
@@ -107,7 +109,7 @@ def overrides(args: argparse.Namespace) -> dict:
     if args.lr_schedule or args.lr is not None:
         policy = get_recipe(args.recipe).policy
         if not isinstance(policy, ActSettings):
-            raise ValueError(f"--lr and --lr-schedule set ACT's learning rate; recipe {args.recipe!r} trains "
+            raise ConfigError(f"--lr and --lr-schedule set ACT's learning rate; recipe {args.recipe!r} trains "
                              f"{policy.name}, which keeps LeRobot's")
         if args.lr_schedule:
             policy = replace(policy, lr_schedule=args.lr_schedule)
@@ -126,6 +128,7 @@ def overrides(args: argparse.Namespace) -> dict:
     return found
 
 
+@guarded("colorsort-baseline")
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
@@ -137,27 +140,15 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{r.name:<{width}}  {r.label:<{label_width}} demos {','.join(map(str, r.demos))} from "
                   f"{'+'.join(r.train_variants)}, {length} x {seeds} on {r.device}")
         return 0
-    try:  # a bad number in --demos or a weight is a ValueError too
-        recipe = get_recipe(args.recipe, **overrides(args))
-        settings = RunSettings(Path(args.out or f"outputs/baselines/{recipe.name}"), args.workers, args.envs,
-                               args.until)
-    except ValueError as err:
-        print(f"colorsort-baseline: error: {err}", file=sys.stderr)
-        return 2
+    recipe = get_recipe(args.recipe, **overrides(args))  # a bad number in --demos or a weight is a ValueError too
+    settings = RunSettings(Path(args.out or f"outputs/baselines/{recipe.name}"), args.workers, args.envs, args.until)
     ship_to = Path(args.ship) if args.ship else None
     if ship_to and ship_to.exists() and any(ship_to.iterdir()):
-        print(f"colorsort-baseline: error: {ship_to} exists: remove it first, or ship elsewhere", file=sys.stderr)
-        return 2
+        raise DataExistsError(f"{ship_to} exists: remove it first, or ship elsewhere")
     if args.fresh:
         shutil.rmtree(settings.out, ignore_errors=True)
-    try:
-        run_pipeline(recipe, settings, shlex.join(["colorsort-baseline", *argv]), ship_to)
-    except RuntimeError as err:
-        print(f"colorsort-baseline: {err}", file=sys.stderr)
-        return 1
-    except ValueError as err:  # OUT holds a stage of other settings: nothing is overwritten
-        print(f"colorsort-baseline: error: {err}", file=sys.stderr)
-        return 2
+    run_pipeline(recipe, settings, shlex.join(["colorsort-baseline", *argv]), ship_to)  # DataConflictError: OUT
+    # holds a stage of other settings, nothing overwritten
     return 0
 
 

@@ -30,9 +30,11 @@ from tqdm import tqdm
 
 from colorsort.cell.cameras import CAMERAS, parse_cameras
 from colorsort.cli.args import parse_image_size, parse_range
+from colorsort.cli.run import guarded
 from colorsort.config import PRESETS
 from colorsort.data.collect import CollectSummary, collect
 from colorsort.data.config import FPS_CHOICES, VCODECS, CollectConfig
+from colorsort.errors import FAILED, INTERRUPTED
 from colorsort.executors.base import EXECUTORS
 from colorsort.logs import quiet_robosuite_info
 from colorsort.robots import ROBOTS
@@ -91,19 +93,15 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
         preset, robot = v.preset, v.robot
     else:
         preset, robot = args.preset or d.preset, args.robot or d.robot
-    try:
-        return CollectConfig(
-            episodes=args.episodes, boxes_per_episode=args.boxes_per_episode, preset=preset, robot=robot,
-            variant=args.variant, seed=args.seed, out=args.out, repo_id=args.repo_id,
-            cameras=parse_cameras(args.cameras),
-            image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
-            executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
-            late_pass=args.late_pass, late_pick=args.late_pick, turn_to_box=not args.no_turn, resume=args.resume,
-            overwrite=args.overwrite,
-            brightness=parse_range(args.brightness) if args.brightness else None)
-    except ValueError as err:
-        parser.error(str(err))  # exits with status 2
-        raise
+    return CollectConfig(
+        episodes=args.episodes, boxes_per_episode=args.boxes_per_episode, preset=preset, robot=robot,
+        variant=args.variant, seed=args.seed, out=args.out, repo_id=args.repo_id,
+        cameras=parse_cameras(args.cameras),
+        image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
+        executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
+        late_pass=args.late_pass, late_pick=args.late_pick, turn_to_box=not args.no_turn, resume=args.resume,
+        overwrite=args.overwrite,
+        brightness=parse_range(args.brightness) if args.brightness else None)
 
 
 def print_summary(config: CollectConfig, s: CollectSummary) -> None:
@@ -122,21 +120,18 @@ def print_summary(config: CollectConfig, s: CollectSummary) -> None:
         print("interrupted: every finished episode is saved; run again with --resume to record the rest")
 
 
+@guarded("colorsort-collect")
 def main(argv: list[str] | None = None) -> int:
     quiet_robosuite_info()
     config = parse_args(argv)
-    try:
-        summary = collect(config, progress=True, log=tqdm.write)
-    except (FileExistsError, ValueError) as err:
-        print(f"colorsort-collect: error: {err}", file=sys.stderr)
-        return 2
+    summary = collect(config, progress=True, log=tqdm.write)
     print_summary(config, summary)
     for error in summary.errors:
         print(f"a worker failed:\n{error}", file=sys.stderr)
     if summary.interrupted:
-        return 130
+        return INTERRUPTED
     if summary.errors or summary.dataset_episodes == 0:
-        return 1
+        return FAILED
     return 0
 
 

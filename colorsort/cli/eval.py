@@ -40,11 +40,14 @@ from colorsort.benchmark.evaluate import observation_settings, run_evaluation
 from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
 from colorsort.benchmark.report_page import SUCCESSES_FILMED, choose_films, write_report
+from colorsort.cli.run import guarded
+from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, EXECUTORS, ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
 from colorsort.variants import VARIANTS, get_variant
 
 
+@guarded("colorsort-eval")
 def main(argv: list[str] | None = None) -> int:
     quiet_robosuite_info()
     parser = argparse.ArgumentParser(prog="colorsort-eval", description=__doc__,
@@ -92,20 +95,13 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--videos: films go into a report; give --report DIR")
     if args.report and Path(args.report).exists() and any(Path(args.report).iterdir()) and not args.overwrite:
         parser.error(f"--report {args.report} exists and is not empty; pass --overwrite to replace it")
-    try:
-        executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
-        cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
-        names = variant_names(args.policy, args.variant)
-        film = args.report is not None and args.videos != 0
-        evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
-                                    cameras=cameras, episode_length=args.episode_length, executor=executor,
-                                    shard_size=args.shard_size, film=film)
-    except ValueError as err:
-        print(f"colorsort-eval: error: {err}", file=sys.stderr)
-        return 2
-    except RuntimeError as err:
-        print(f"colorsort-eval: {err}", file=sys.stderr)
-        return 1
+    executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
+    cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
+    names = variant_names(args.policy, args.variant)
+    film = args.report is not None and args.videos != 0
+    evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
+                                cameras=cameras, episode_length=args.episode_length, executor=executor,
+                                shard_size=args.shard_size, film=film)
     reports = evaluation.reports
     print(format_report(reports[0]) if args.variant != "all" else f"policy {args.policy}\n" + format_table(reports))
     found = [asdict(r) for r in reports]
@@ -130,7 +126,7 @@ def variant_names(policy: str, variant: str) -> list[str]:
         reason = misfit(policy, get_variant(variant))
         if reason:
             fits = [v.name for v in VARIANTS.values() if not misfit(policy, v)]
-            raise ValueError(f"{policy} cannot run on {variant}: {reason}; variants it fits: {fits}")
+            raise ConfigError(f"{policy} cannot run on {variant}: {reason}; variants it fits: {fits}")
         return [variant]
     names = []
     for v in VARIANTS.values():

@@ -25,10 +25,13 @@ from pathlib import Path
 
 from colorsort.cell.cameras import CAMERAS
 from colorsort.cli.args import parse_image_size
+from colorsort.cli.run import guarded
 from colorsort.data.replay import MIN_PSNR_DB, replay
+from colorsort.errors import FAILED
 from colorsort.logs import quiet_robosuite_info
 
 
+@guarded("colorsort-replay")
 def main(argv: list[str] | None = None) -> int:
     quiet_robosuite_info()
     # datasets' note when HF_DATASETS_DISABLE_PROGRESS_BARS is set, and torchvision's deprecation notice
@@ -44,17 +47,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--video", default=None, help="mp4 path (default outputs/replay_ep<I>_<camera>.mp4)")
     parser.add_argument("--sheet", default=None, help="contact sheet PNG path (default: the video's, .png)")
     args = parser.parse_args(argv)
-    try:
-        size = parse_image_size(args.size) if args.size else None
-    except ValueError as err:
-        parser.error(str(err))
+    size = parse_image_size(args.size) if args.size else None
     video = args.video or f"outputs/replay_ep{args.episode}_{args.camera}.mp4"
     sheet = args.sheet or str(Path(video).with_suffix(".png"))
-    try:
-        report = replay(args.dataset, args.episode, args.camera, size, video, sheet)
-    except ValueError as err:
-        print(f"colorsort-replay: error: {err}", file=sys.stderr)
-        return 2
+    report = replay(args.dataset, args.episode, args.camera, size, video, sheet)
     print(f"episode {args.episode}: {report.frames} frames -> {report.video}, contact sheet {report.sheet}")
     print(f"state replay: {report.frames - report.state_mismatches}/{report.frames} restored states give back "
           "the recorded observation.state and environment_state exactly")
@@ -66,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"state replay -> {'ok' if report.state_replay_ok else 'FAILED'}")
     print(f"action replay: outcomes {report.outcomes}, max qpos deviation {report.max_state_error:.2e} "
           f"-> {'ok' if report.action_replay_ok else 'FAILED'}")
-    return 0 if report.state_replay_ok and report.action_replay_ok else 1
+    return 0 if report.state_replay_ok and report.action_replay_ok else FAILED
 
 
 if __name__ == "__main__":

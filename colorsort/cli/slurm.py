@@ -20,9 +20,11 @@ import argparse
 import sys
 from pathlib import Path
 
+from colorsort.cli.run import guarded
 from colorsort.executors.slurm import SlurmJob, job_script
 
 
+@guarded("colorsort-slurm")
 def main(argv: list[str] | None = None) -> int:
     d = SlurmJob()
     parser = argparse.ArgumentParser(prog="colorsort-slurm", description=__doc__,
@@ -37,11 +39,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("command", nargs=argparse.REMAINDER, help="-- colorsort-collect ... or -- colorsort-eval ...")
     args = parser.parse_args(argv)
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
-    try:
-        script = job_script(SlurmJob(args.nodes, args.cpus_per_node, args.time, args.partition, args.venv, args.port),
-                            command)
-    except ValueError as err:
-        parser.error(str(err))
+    script = job_script(SlurmJob(args.nodes, args.cpus_per_node, args.time, args.partition, args.venv, args.port),
+                        command)
     if args.out is None:
         print(script, end="")
         return 0

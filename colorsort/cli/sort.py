@@ -22,6 +22,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from colorsort.benchmark.sorting import SortConfig, run_sort
+from colorsort.cli.run import guarded
 from colorsort.config import PRESETS
 from colorsort.logs import quiet_robosuite_info
 from colorsort.robots import ROBOTS
@@ -37,14 +38,11 @@ def parse_args(argv: list[str] | None) -> SortConfig:
     parser.add_argument("--video", default=None, help="mp4 of the scene camera with an overlay")
     parser.add_argument("--json", default=None, help="write the summary as JSON here")
     args = parser.parse_args(argv)
-    try:
-        return SortConfig(preset=args.preset, robot=args.robot, boxes=args.boxes, seed=args.seed,
-                          video=args.video, json=args.json)
-    except ValueError as err:
-        parser.error(str(err))  # exits with status 2
-        raise
+    return SortConfig(preset=args.preset, robot=args.robot, boxes=args.boxes, seed=args.seed,
+                      video=args.video, json=args.json)
 
 
+@guarded("colorsort-sort")
 def main(argv: list[str] | None = None) -> int:
     quiet_robosuite_info()
     config = parse_args(argv)

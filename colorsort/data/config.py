@@ -6,6 +6,7 @@ from dataclasses import asdict, dataclass
 
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
+from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.robots import get_robot
 from colorsort.variants import VARIANTS, check_brightness, get_variant
@@ -19,9 +20,9 @@ def check_late_pick(steps: int, tracking: bool) -> None:
     """``ValueError`` unless ``steps`` [control steps] is 0 (off) to ``MAX_LATE_PICK``, and 0 on a tracking belt
     (``tracking``), where a held pick's box would move on."""
     if not 0 <= steps <= MAX_LATE_PICK:
-        raise ValueError(f"late_pick={steps}: give 0 (off) to {MAX_LATE_PICK} control steps")
+        raise ConfigError(f"late_pick={steps}: give 0 (off) to {MAX_LATE_PICK} control steps")
     if steps and tracking:
-        raise ValueError(f"late_pick={steps} holds a pick back on a stopped belt; on a tracking belt the box "
+        raise ConfigError(f"late_pick={steps} holds a pick back on a stopped belt; on a tracking belt the box "
                          "would move on: give late_pick=0")
 
 
@@ -61,18 +62,18 @@ class CollectConfig:
         if self.variant is not None:
             v = get_variant(self.variant)
             if (self.preset, self.robot) != (v.preset, v.robot):
-                raise ValueError(f"variant {self.variant!r} sets the preset ({v.preset!r}) and robot ({v.robot!r}); "
+                raise ConfigError(f"variant {self.variant!r} sets the preset ({v.preset!r}) and robot ({v.robot!r}); "
                                  f"got preset={self.preset!r}, robot={self.robot!r}: give the variant alone")
         if self.preset not in PRESETS:
-            raise ValueError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
+            raise ConfigError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
         get_robot(self.robot)
         bad = [c for c in self.cameras if c not in CAMERAS]
         if bad or len(set(self.cameras)) != len(self.cameras):
-            raise ValueError(f"cameras={self.cameras}: give distinct names from {list(CAMERAS)}, or none")
+            raise ConfigError(f"cameras={self.cameras}: give distinct names from {list(CAMERAS)}, or none")
         if self.fps not in FPS_CHOICES:
-            raise ValueError(f"fps={self.fps} not supported. Valid values: {list(FPS_CHOICES)}")
+            raise ConfigError(f"fps={self.fps} not supported. Valid values: {list(FPS_CHOICES)}")
         if self.vcodec not in VCODECS:
-            raise ValueError(f"Unknown vcodec {self.vcodec!r}. Valid codecs: {list(VCODECS)}")
+            raise ConfigError(f"Unknown vcodec {self.vcodec!r}. Valid codecs: {list(VCODECS)}")
         check_range("episodes", self.episodes, 1, 1_000_000)
         check_range("boxes_per_episode", self.boxes_per_episode, 1, 100)
         self.executor_config  # noqa: B018 - validates executor, workers, retries and address
@@ -80,17 +81,17 @@ class CollectConfig:
         check_range("late_pass", self.late_pass, 0, 100)
         check_late_pick(self.late_pick, self.task_config.tracking)
         if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
-            raise ValueError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
+            raise ConfigError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
         if self.brightness is not None:
             if self.variant is None or not get_variant(self.variant).random_lights:
                 lit = [n for n, v in VARIANTS.items() if v.random_lights]
-                raise ValueError(f"brightness={self.brightness} sets a random-lights variant's range: give "
+                raise ConfigError(f"brightness={self.brightness} sets a random-lights variant's range: give "
                                  f"variant one of {lit} (got {self.variant!r})")
             check_brightness("brightness", self.brightness)
         if self.seed < 0:
-            raise ValueError(f"seed={self.seed} must be >= 0")
+            raise ConfigError(f"seed={self.seed} must be >= 0")
         if self.resume and self.overwrite:
-            raise ValueError("Pass --resume or --overwrite, not both")
+            raise ConfigError("Pass --resume or --overwrite, not both")
 
     def settings(self) -> dict:
         """The settings every episode of one dataset must share (checked on --resume)."""

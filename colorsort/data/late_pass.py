@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from colorsort.errors import ConfigError
+
 # a generator of its own, seeded from the episode's seed: the env's own draws (boxes, lights) are
 # untouched, so an episode recorded with late_pass differs from one without only by the delays
 STREAM = 0x1A7E
@@ -27,7 +29,7 @@ class LatePass:
 
     def __init__(self, max_steps: int):
         if max_steps < 0:
-            raise ValueError(f"late_pass={max_steps}: give 0 (off) or more control steps")
+            raise ConfigError(f"late_pass={max_steps}: give 0 (off) or more control steps")
         self.max_steps = max_steps
         self.rng = np.random.default_rng()
         self.commanded = False  # the expert's belt-pass in the previous step

@@ -24,6 +24,7 @@ from colorsort.data.config import CollectConfig
 from colorsort.data.schema import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
 from colorsort.data.store import MARKER
 from colorsort.data.video import VideoWriter, contact_sheet, save_png
+from colorsort.errors import ConfigError
 
 # re-rendered vs decoded frames, worst frame: measured 26.6 dB at 64 px, 29.1 dB at 128 px (h264, crf 30)
 MIN_PSNR_DB = 24.0
@@ -52,15 +53,15 @@ def load_episode(root: str | Path, index: int, repo_id: str | None = None) -> Re
     root = Path(root)
     marker_path = root / MARKER
     if not marker_path.is_file():
-        raise ValueError(not_replayable(root))
+        raise ConfigError(not_replayable(root))
     marker = json.loads(marker_path.read_text())
     settings, layout = marker["settings"], marker.get("sim_state")  # no layout: recorded before it was stored
     if layout is not None and layout["version"] != sim_state.VERSION:
-        raise ValueError(f"{root} stores sim_state version {layout['version']}; this ColorSort reads version "
+        raise ConfigError(f"{root} stores sim_state version {layout['version']}; this ColorSort reads version "
                          f"{sim_state.VERSION}: replay it with the ColorSort that recorded it")
     meta = _metadata(repo_id or settings["repo_id"], root)
     if not 0 <= index < meta.total_episodes:
-        raise ValueError(f"episode {index} does not exist; valid episodes: 0..{meta.total_episodes - 1}")
+        raise ConfigError(f"episode {index} does not exist; valid episodes: 0..{meta.total_episodes - 1}")
     ds = _episode_frames(root, meta, index)
     return RecordedEpisode(root, index, settings, np.stack(ds[SIM_STATE]).astype(np.float64),
                            np.stack(ds[ACTION]).astype(np.float32), np.stack(ds[STATE]).astype(np.float32),
@@ -198,7 +199,7 @@ def replay(root: str | Path, index: int, camera: str = "scene", size: tuple[int,
            video: str | None = None, sheet: str | None = None, progress: bool = True) -> ReplayReport:
     """State replay (render, compare) and action replay of one episode, as the module docstring says."""
     if camera not in CAMERAS:
-        raise ValueError(f"Unknown camera {camera!r}. Valid cameras: {list(CAMERAS)}")
+        raise ConfigError(f"Unknown camera {camera!r}. Valid cameras: {list(CAMERAS)}")
     episode = load_episode(root, index)
     recorded_size = tuple(episode.settings["image_size"])
     size = tuple(size or recorded_size)

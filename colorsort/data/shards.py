@@ -23,6 +23,7 @@ from pathlib import Path
 from colorsort.data.config import CollectConfig
 from colorsort.data.recorder import ShardReport, record_shard
 from colorsort.data.store import SHARD_MARKER, read_shard, write_whole
+from colorsort.errors import StageError
 from colorsort.executors.base import TaskContext
 
 # What worker processes import once, before they fork (seconds of torch):
@@ -107,5 +108,5 @@ def merge_in_child(sources: list[Path], dest: Path, repo_id: str) -> None:
     p.start()
     p.join()
     if p.exitcode != 0:
-        raise RuntimeError(f"merging {len(sources)} datasets into {dest} failed (exit code {p.exitcode}); "
+        raise StageError(f"merging {len(sources)} datasets into {dest} failed (exit code {p.exitcode}); "
                            f"the recorded shards are kept in {dest.parent}")

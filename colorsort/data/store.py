@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from colorsort.data.config import CollectConfig
+from colorsort.errors import DataConflictError, DataExistsError
 
 MARKER = "meta/colorsort.json"  # the collector's record: settings and the episodes tried
 RUN_FILE = "run.json"  # in the staging folder: the run its shards belong to
@@ -58,17 +59,18 @@ def check_output(config: CollectConfig, root: Path) -> dict | None:
     is_dataset = (root / "meta" / "info.json").is_file()
     if config.overwrite:
         if not is_dataset:
-            raise FileExistsError(f"{root} exists and is not a LeRobot dataset: not overwriting it")
+            raise DataExistsError(f"{root} exists and is not a LeRobot dataset: not overwriting it")
         return None
     if not config.resume:
-        raise FileExistsError(f"{root} already exists. Pass --resume to add the missing episodes to it, "
+        raise DataExistsError(f"{root} already exists. Pass --resume to add the missing episodes to it, "
                               "--overwrite to replace it, or choose another --out")
     marker = read_marker(root)
     if marker is None:
-        raise ValueError(f"Cannot resume {root}: it has no {MARKER}, so it was not recorded by colorsort-collect")
+        raise DataConflictError(f"Cannot resume {root}: it has no {MARKER}, so it was not recorded by "
+                                "colorsort-collect")
     if marker["settings"] != config.settings():
-        raise ValueError(f"Cannot resume {root} with other settings (recorded, requested): "
-                         f"{settings_diff(marker['settings'], config)}")
+        raise DataConflictError(f"Cannot resume {root} with other settings (recorded, requested): "
+                                f"{settings_diff(marker['settings'], config)}")
     return marker
 
 
@@ -87,12 +89,12 @@ def open_staging(config: CollectConfig, root: Path, log) -> tuple[Path, str]:
         if config.resume and run_file.is_file():
             run = json.loads(run_file.read_text())
             if run["settings"] != config.settings():
-                raise ValueError(f"Cannot resume the run in {staging} with other settings (recorded, requested): "
-                                 f"{settings_diff(run['settings'], config)}")
+                raise DataConflictError(f"Cannot resume the run in {staging} with other settings "
+                                        f"(recorded, requested): {settings_diff(run['settings'], config)}")
             return staging, run["run"]
         if done and not config.overwrite:
             episodes = sum(len(m["kept"]) for _, m in done)
-            raise FileExistsError(f"{staging} holds {len(done)} finished shards ({episodes} episodes kept) of a run "
+            raise DataExistsError(f"{staging} holds {len(done)} finished shards ({episodes} episodes kept) of a run "
                                   "that was killed. Pass --resume to keep them and record the rest, or --overwrite "
                                   "to discard them")
         log(f"removing {staging}, left by a run that was killed")
@@ -138,14 +140,14 @@ def check_shards(shards: list[tuple[Path, dict]], run: str, config: CollectConfi
     seen = set(in_dataset)
     for path, marker in shards:
         if marker["run"] != run:
-            raise ValueError(f"{path} was recorded by run {marker['run']}, not by run {run} that this staging "
+            raise DataConflictError(f"{path} was recorded by run {marker['run']}, not by run {run} that this staging "
                              "folder belongs to: it comes from another run; move it away")
         if marker["settings"] != config.settings():
-            raise ValueError(f"{path} was recorded with other settings (recorded, requested): "
+            raise DataConflictError(f"{path} was recorded with other settings (recorded, requested): "
                              f"{settings_diff(marker['settings'], config)}")
         twice = seen & set(marker["tried"])
         if twice:
-            raise ValueError(f"{path} holds episodes {sorted(twice)} that the dataset or another shard already "
+            raise DataConflictError(f"{path} holds episodes {sorted(twice)} that the dataset or another shard already "
                              "holds: it comes from another run; move it away")
         seen |= set(marker["tried"])
 

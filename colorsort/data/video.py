@@ -10,6 +10,8 @@ import av
 import cv2
 import numpy as np
 
+from colorsort.errors import ConfigError
+
 
 class VideoWriter:
     """Write RGB frames (H, W, 3) uint8 to an mp4; use as a context manager.
@@ -38,7 +40,7 @@ class VideoWriter:
             stream = container.add_stream(self.codec, rate=self.fps)
             if not isinstance(stream, av.VideoStream):
                 container.close()
-                raise ValueError(f"codec {self.codec!r} does not encode video")
+                raise ConfigError(f"codec {self.codec!r} does not encode video")
             stream.width, stream.height = w, h
             stream.pix_fmt = "yuv420p"
             stream.options = {"crf": str(self.crf)}
@@ -101,7 +103,7 @@ def contact_sheet(frames: list[np.ndarray], columns: int = 4, rows: int = 3, fps
         width: width of the sheet [px]; tiles keep the frames' aspect ratio.
     """
     if not frames:
-        raise ValueError("contact_sheet needs at least one frame")
+        raise ConfigError("contact_sheet needs at least one frame")
     picks = np.unique(np.linspace(0, len(frames) - 1, min(columns * rows, len(frames))).round().astype(int))
     h, w = frames[0].shape[:2]
     tile_w = width // columns

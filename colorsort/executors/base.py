@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from colorsort.config import check_range
+from colorsort.errors import ConfigError
 
 EXECUTORS = ("local", "ray")
 DEFAULT_SHARD_SIZE = 32  # episodes per task: a few dozen, so a cluster merges hundreds of shards, not thousands
@@ -38,11 +39,11 @@ class ExecutorConfig:
 
     def __post_init__(self) -> None:
         if self.name not in EXECUTORS:
-            raise ValueError(f"Unknown executor {self.name!r}. Valid executors: {list(EXECUTORS)}")
+            raise ConfigError(f"Unknown executor {self.name!r}. Valid executors: {list(EXECUTORS)}")
         check_range("workers", self.workers, 1, 100_000)
         check_range("retries", self.retries, 0, 100)
         if self.address is not None and self.name != "ray":
-            raise ValueError(f"address={self.address!r} is for the ray executor; got executor {self.name!r}")
+            raise ConfigError(f"address={self.address!r} is for the ray executor; got executor {self.name!r}")
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from colorsort.config import check_range
+from colorsort.errors import ConfigError
 
 COMMANDS = {"colorsort-collect": "--workers", "colorsort-eval": "--envs"}  # the command -> its worker flag
 
@@ -35,7 +36,7 @@ class SlurmJob:
         check_range("cpus_per_node", self.cpus_per_node, 1, 1024)
         check_range("port", self.port, 1024, 65535)
         if len(self.time.split(":")) != 3 or not all(p.isdigit() for p in self.time.split(":")):
-            raise ValueError(f"time={self.time!r}: give HH:MM:SS, e.g. 04:00:00")
+            raise ConfigError(f"time={self.time!r}: give HH:MM:SS, e.g. 04:00:00")
 
 
 def job_script(job: SlurmJob, command: list[str]) -> str:
@@ -45,12 +46,12 @@ def job_script(job: SlurmJob, command: list[str]) -> str:
         ValueError: another command, or one that names an executor other than ray.
     """
     if not command or command[0] not in COMMANDS:
-        raise ValueError(f"command {command[:1]}: give one of {list(COMMANDS)}, with its arguments")
+        raise ConfigError(f"command {command[:1]}: give one of {list(COMMANDS)}, with its arguments")
     args = list(command)
     if "--executor" in args and args[args.index("--executor") + 1:][:1] != ["ray"]:
-        raise ValueError("the SLURM script runs the command on Ray: leave out --executor, or give --executor ray")
+        raise ConfigError("the SLURM script runs the command on Ray: leave out --executor, or give --executor ray")
     if "--address" in args:
-        raise ValueError("the SLURM script sets --address to the Ray head it starts: leave it out of the command")
+        raise ConfigError("the SLURM script sets --address to the Ray head it starts: leave it out of the command")
     extra = []
     if "--executor" not in args:
         extra += ["--executor", "ray"]

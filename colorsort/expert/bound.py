@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from colorsort.errors import ConfigError
 from colorsort.expert.planning import JointLimits, JointTrajectory, Waypoint, plan_motion
 from colorsort.expert.tracking import TrackingExpert, carry_height
 
@@ -99,7 +100,7 @@ class Cycle:
 def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") -> Cycle:
     """The cycle for a box at ``x`` [m] on the belt's centre line going to the ``color`` bin (``MODES``)."""
     if mode not in MODES:
-        raise ValueError(f"mode={mode!r}: valid modes are {list(MODES)}")
+        raise ConfigError(f"mode={mode!r}: valid modes are {list(MODES)}")
     L, cfg = expert.layout, expert.config
     top = L.belt_top_z + L.box_size
     over, on, lift = (Waypoint(name, (x, L.belt_y, z), expert.cup_yaw) for name, z in (

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from colorsort.errors import ConfigError
 from colorsort.expert.base import Expert
 from colorsort.expert.calibration import Calibration, sensor_source
 from colorsort.expert.config import STOPPING_EXPERT, TRACKING_EXPERT, ExpertConfig
@@ -28,7 +29,7 @@ def make_expert(env: ColorSort, config: ExpertConfig | None = None) -> Expert:
     ``action = expert.act(obs)`` every step.
     """
     if not env.has_offscreen_renderer:
-        raise ValueError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
+        raise ConfigError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
     tracking = env.config.tracking
     config = config or expert_preset(tracking)
     size, image = sensor_source(env, config.sensor_image_size)

@@ -17,6 +17,8 @@ from collections.abc import Iterable
 import mujoco
 import numpy as np
 
+from colorsort.errors import ConfigError
+
 TORQUE_SHARE = 0.8  # of each joint's torque-limited acceleration that motions are planned at
 
 
@@ -30,7 +32,7 @@ def torque_limited_accelerations(model: mujoco.MjModel, poses: Iterable[np.ndarr
     poses = [np.asarray(q, float) for q in poses]
     n = len(poses[0])
     if list(model.actuator_trnid[:n, 0]) != list(range(n)):
-        raise ValueError(f"the model's first {n} actuators do not drive its first {n} joints in order")
+        raise ConfigError(f"the model's first {n} actuators do not drive its first {n} joints in order")
     torque = np.abs(model.actuator_ctrlrange[:n, 1] * model.actuator_gear[:n, 0]) - model.dof_frictionloss[:n]  # [N m]
     data = mujoco.MjData(model)
     inertia = np.zeros((model.nv, model.nv))
@@ -41,6 +43,6 @@ def torque_limited_accelerations(model: mujoco.MjModel, poses: Iterable[np.ndarr
         mujoco.mj_fullM(model, inertia, data.qM)
         least = np.minimum(least, (torque - np.abs(data.qfrc_bias[:n])) / np.diag(inertia)[:n])
     if np.any(least <= 0.0):
-        raise ValueError(f"joints {np.flatnonzero(least <= 0.0).tolist()} cannot hold the arm up at some pose: "
+        raise ConfigError(f"joints {np.flatnonzero(least <= 0.0).tolist()} cannot hold the arm up at some pose: "
                          f"their torque limits less friction, {torque.tolist()} N m, are below gravity's")
     return share * least

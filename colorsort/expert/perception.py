@@ -26,6 +26,7 @@ import cv2
 import numpy as np
 
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, check_range
+from colorsort.errors import ConfigError
 
 UNKNOWN = "unknown"
 
@@ -105,7 +106,7 @@ class PerceptionConfig:
     def __post_init__(self) -> None:
         unknown = [c for c in self.colors if c not in COLORS]
         if unknown:
-            raise ValueError(f"Unknown colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
+            raise ConfigError(f"Unknown colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
         check_range("hue_tolerance", self.hue_tolerance, 1.0, 90.0)
         for name in ("min_saturation", "min_value", "min_area"):
             check_range(name, getattr(self, name), 0.0, 1.0)
@@ -203,7 +204,7 @@ class ColorSensor:
         """
         cam, cfg = self.camera, self.config
         if image.shape != (cam.height, cam.width, 3) or image.dtype != np.uint8:
-            raise ValueError(f"Expected a ({cam.height}, {cam.width}, 3) uint8 image, got {image.shape} {image.dtype}")
+            raise ConfigError(f"Expected a ({cam.height}, {cam.width}, 3) uint8 image, got {image.shape} {image.dtype}")
         hsv = cv2.cvtColor(cv2.GaussianBlur(image, (3, 3), 0), cv2.COLOR_RGB2HSV_FULL)
         valid = (hsv[..., 1] >= self._min_s) & (hsv[..., 2] >= self._min_v) & self._roi_bool
         label_img = np.where(valid, self._label_lut[hsv[..., 0]], 255).astype(np.uint8)  # (H, W)

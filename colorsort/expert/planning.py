@@ -23,6 +23,7 @@ import numpy as np
 import ruckig
 
 from colorsort.config import check_range
+from colorsort.errors import ConfigError, PlanningError
 
 GRIP_SITE = "gripper0_right_grip_site"
 POSITION_TOLERANCE = 1e-3  # [m] a waypoint is reached within this
@@ -69,7 +70,7 @@ class JointLimits:
         if config.acceleration is not None:
             acceleration = np.full(len(velocity), config.acceleration)
         elif accelerations is None:
-            raise ValueError("MotionConfig(acceleration=None) plans at each joint's own acceleration: "
+            raise ConfigError("MotionConfig(acceleration=None) plans at each joint's own acceleration: "
                              "give accelerations")
         else:
             acceleration = np.asarray(accelerations, float)
@@ -227,5 +228,5 @@ def plan_motion(start: np.ndarray, goal: np.ndarray, limits: JointLimits,
     trajectory = ruckig.Trajectory(n)
     result = ruckig.Ruckig(n).calculate(inp, trajectory)
     if result not in (ruckig.Result.Working, ruckig.Result.Finished):
-        raise RuntimeError(f"ruckig could not plan from {np.round(start, 3)} to {np.round(goal, 3)}: {result}")
+        raise PlanningError(f"ruckig could not plan from {np.round(start, 3)} to {np.round(goal, 3)}: {result}")
     return JointTrajectory(trajectory, np.asarray(start, float), np.asarray(goal, float))

@@ -14,6 +14,7 @@ import numpy as np
 from colorsort.cell.env import ColorSort
 from colorsort.cell.lighting import LightRig, sensor_effects
 from colorsort.config import Lighting
+from colorsort.errors import ConfigError
 from colorsort.expert.perception import CameraModel
 
 LAYOUTS: tuple[str, ...] = ("single", "partial", "two_boxes")
@@ -64,7 +65,7 @@ class ViewSampler:
                other_colors: tuple[str, ...] = ("red", "green", "blue")) -> View:
         """One random view of a ``color`` box; ``layout`` is one of ``LAYOUTS``."""
         if layout not in LAYOUTS:
-            raise ValueError(f"Unknown layout {layout!r}. Valid layouts: {list(LAYOUTS)}")
+            raise ConfigError(f"Unknown layout {layout!r}. Valid layouts: {list(LAYOUTS)}")
         env, L = self.env, self.env.layout
         for box in env.boxes_in_play():
             env.remove_box(box)

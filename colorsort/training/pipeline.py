@@ -16,6 +16,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from colorsort.errors import ConfigError
 from colorsort.training import selection, stages
 from colorsort.training.recipes import Recipe
 from colorsort.training.report import first_episodes, plot_curve, plot_demos, summary_table, table
@@ -42,10 +43,10 @@ class RunSettings:
 
     def __post_init__(self) -> None:
         if self.until not in UNTIL:
-            raise ValueError(f"until={self.until!r}: valid stages are {list(UNTIL)}")
+            raise ConfigError(f"until={self.until!r}: valid stages are {list(UNTIL)}")
         for key in ("workers", "envs"):
             if getattr(self, key) < 1:
-                raise ValueError(f"{key}={getattr(self, key)}: give at least 1")
+                raise ConfigError(f"{key}={getattr(self, key)}: give at least 1")
 
 
 def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: Path | None = None) -> dict:

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+from colorsort.errors import ConfigError
+
 LR_SCHEDULES = ("constant", "cosine")
 DEFAULT_LR = 1e-4  # ACT's learning rate here, its backbone's too
 
@@ -52,13 +54,13 @@ class ActSettings:
 
     def __post_init__(self) -> None:
         if self.lr_schedule not in LR_SCHEDULES:
-            raise ValueError(f"lr_schedule={self.lr_schedule!r}: valid schedules are {list(LR_SCHEDULES)}")
+            raise ConfigError(f"lr_schedule={self.lr_schedule!r}: valid schedules are {list(LR_SCHEDULES)}")
         if self.warmup_steps < 0:
-            raise ValueError(f"warmup_steps={self.warmup_steps}: give 0 or more")
+            raise ConfigError(f"warmup_steps={self.warmup_steps}: give 0 or more")
         if not 1 <= self.n_action_steps <= self.chunk_size:
-            raise ValueError(f"n_action_steps={self.n_action_steps}: give 1 to chunk_size ({self.chunk_size})")
+            raise ConfigError(f"n_action_steps={self.n_action_steps}: give 1 to chunk_size ({self.chunk_size})")
         if self.temporal_ensemble_coeff is not None and self.n_action_steps != 1:
-            raise ValueError(f"temporal_ensemble_coeff={self.temporal_ensemble_coeff} needs n_action_steps=1 "
+            raise ConfigError(f"temporal_ensemble_coeff={self.temporal_ensemble_coeff} needs n_action_steps=1 "
                              f"(got {self.n_action_steps}); or set temporal_ensemble_coeff=None")
 
     @property
@@ -87,7 +89,7 @@ class ActSettings:
         args = [f"--policy.{k}={_text(v)}" for k, v in policy.items()]
         if self.lr_schedule == "cosine":
             if self.optimizer_lr_backbone != self.optimizer_lr:
-                raise ValueError("lr_schedule='cosine' trains every parameter at optimizer_lr: "
+                raise ConfigError("lr_schedule='cosine' trains every parameter at optimizer_lr: "
                                  f"give optimizer_lr_backbone={self.optimizer_lr} too")
             # LeRobot's ACT preset has no schedule, so the optimizer is spelt out (ACT's own AdamW settings)
             args += ["--use_policy_training_preset=false", "--optimizer.type=adamw",
@@ -133,16 +135,16 @@ class DiffusionSettings:
 
     def __post_init__(self) -> None:
         if not 1 <= self.n_action_steps <= self.horizon - self.n_obs_steps + 1:
-            raise ValueError(f"n_action_steps={self.n_action_steps}: give 1 to horizon - n_obs_steps + 1 "
+            raise ConfigError(f"n_action_steps={self.n_action_steps}: give 1 to horizon - n_obs_steps + 1 "
                              f"({self.horizon - self.n_obs_steps + 1})")
         if self.n_obs_steps < 1 or self.num_inference_steps < 1:
-            raise ValueError(f"n_obs_steps={self.n_obs_steps}, num_inference_steps={self.num_inference_steps}: "
+            raise ConfigError(f"n_obs_steps={self.n_obs_steps}, num_inference_steps={self.num_inference_steps}: "
                              "give at least 1 each")
         if not self.down_dims or self.horizon % 2 ** len(self.down_dims):
-            raise ValueError(f"horizon={self.horizon}: give a multiple of 2 ** len(down_dims) "
+            raise ConfigError(f"horizon={self.horizon}: give a multiple of 2 ** len(down_dims) "
                              f"({2 ** len(self.down_dims)}), with at least one level in down_dims")
         if not 0.5 <= self.crop_fraction <= 1:
-            raise ValueError(f"crop_fraction={self.crop_fraction}: give 0.5 to 1 (1: no crop)")
+            raise ConfigError(f"crop_fraction={self.crop_fraction}: give 0.5 to 1 (1: no crop)")
 
     @property
     def execution(self) -> str:

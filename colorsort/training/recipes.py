@@ -31,6 +31,7 @@ import json
 from dataclasses import dataclass, replace
 
 from colorsort.data.config import check_late_pick
+from colorsort.errors import ConfigError
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SMALL_DIFFUSION, TRACKING_ACT, PolicySettings
 from colorsort.variants import LIGHT_BRIGHTNESS, check_brightness, get_variant
 
@@ -131,47 +132,47 @@ class Recipe:
         for variant, boxes in self.boxes_by_variant:  # a variant left out of train_mix is not collected
             get_variant(variant)
             if boxes < 1:
-                raise ValueError(f"boxes_by_variant has ({variant!r}, {boxes}): give at least 1 box")
+                raise ConfigError(f"boxes_by_variant has ({variant!r}, {boxes}): give at least 1 box")
         if any(w <= 0 for _, w in self.train_mix):
-            raise ValueError(f"train_mix={self.train_mix}: give every variant a weight above 0")
+            raise ConfigError(f"train_mix={self.train_mix}: give every variant a weight above 0")
         if (not self.demos or list(self.demos) != sorted(set(self.demos))
                 or any(n < len(self.train_mix) for n in self.demos)):
-            raise ValueError(f"demos={self.demos}: give increasing counts, each at least the number of training "
+            raise ConfigError(f"demos={self.demos}: give increasing counts, each at least the number of training "
                              f"variants ({len(self.train_mix)})")
         if self.device not in DEVICES:
-            raise ValueError(f"device={self.device!r}: valid devices are {list(DEVICES)}")
+            raise ConfigError(f"device={self.device!r}: valid devices are {list(DEVICES)}")
         if self.main_variant not in self.eval_variants:
-            raise ValueError(f"main_variant={self.main_variant!r} must be one of eval_variants {self.eval_variants}")
+            raise ConfigError(f"main_variant={self.main_variant!r} must be one of eval_variants {self.eval_variants}")
         for key in ("steps", "small_steps", "batch_size", "eval_episodes", "other_episodes", "curve_episodes",
                     "image_size", "boxes_per_episode"):
             if getattr(self, key) < 1:
-                raise ValueError(f"{key}={getattr(self, key)}: give at least 1")
+                raise ConfigError(f"{key}={getattr(self, key)}: give at least 1")
         if not 0 <= self.image_shift < 0.5:
-            raise ValueError(f"image_shift={self.image_shift}: give 0 (off) up to 0.5 (a fraction of the image)")
+            raise ConfigError(f"image_shift={self.image_shift}: give 0 (off) up to 0.5 (a fraction of the image)")
         if self.image_shift and not self.cameras:
-            raise ValueError(f"image_shift={self.image_shift} shifts camera images: give cameras, or image_shift=0")
+            raise ConfigError(f"image_shift={self.image_shift} shifts camera images: give cameras, or image_shift=0")
         if self.image_relight and not self.cameras:
-            raise ValueError("image_relight=True relights camera images: give cameras, or image_relight=False")
+            raise ConfigError("image_relight=True relights camera images: give cameras, or image_relight=False")
         if self.demo_brightness is not None:
             lit = [v for v in self.train_variants if get_variant(v).random_lights]
             if not lit:
-                raise ValueError(f"demo_brightness={self.demo_brightness} sets the lights of random-lights demos, "
+                raise ConfigError(f"demo_brightness={self.demo_brightness} sets the lights of random-lights demos, "
                                  f"and train_mix has none: add 'lighting', or demo_brightness=None")
             check_brightness("demo_brightness", self.demo_brightness)
         if not 0 <= self.late_pass <= 100:
-            raise ValueError(f"late_pass={self.late_pass}: give 0 (off) to 100 control steps")
+            raise ConfigError(f"late_pass={self.late_pass}: give 0 (off) to 100 control steps")
         check_late_pick(self.late_pick, any(get_variant(v).task_config.tracking for v in self.train_variants))
         if self.passes is not None and not self.passes > 0:
-            raise ValueError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
+            raise ConfigError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds) or min(self.seeds) < 0:
-            raise ValueError(f"seeds={self.seeds}: give one or more distinct seeds, each 0 or more")
+            raise ConfigError(f"seeds={self.seeds}: give one or more distinct seeds, each 0 or more")
         if self.save_every < 0:
-            raise ValueError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
+            raise ConfigError(f"save_every={self.save_every}: give 0 (last checkpoint only) or more")
         if not 0 <= self.select_episodes <= len(VALIDATION_SEEDS):
-            raise ValueError(f"select_episodes={self.select_episodes}: give 0 (the last checkpoint) up to "
+            raise ConfigError(f"select_episodes={self.select_episodes}: give 0 (the last checkpoint) up to "
                              f"{len(VALIDATION_SEEDS)} (the validation seeds)")
         if self.select_episodes and not self.save_every:
-            raise ValueError(f"select_episodes={self.select_episodes} chooses among checkpoints, and save_every=0 "
+            raise ConfigError(f"select_episodes={self.select_episodes} chooses among checkpoints, and save_every=0 "
                              "saves only the last: give save_every, or select_episodes=0")
 
     def _check_fit(self) -> None:
@@ -184,13 +185,13 @@ class Recipe:
 
         trained = {shape(v) for v in self.train_variants}
         if len(trained) > 1:
-            raise ValueError(f"train_mix {list(self.train_variants)} mixes robots or belts (state sizes differ): "
+            raise ConfigError(f"train_mix {list(self.train_variants)} mixes robots or belts (state sizes differ): "
                              "train on variants of one robot and one belt")
         (wanted,) = trained
         bad = [v for v in self.eval_variants if shape(v) != wanted]
         if bad:
             fits = [v for v in VARIANTS if shape(v) == wanted]
-            raise ValueError(f"eval_variants {bad} do not fit a policy trained on {list(self.train_variants)} "
+            raise ConfigError(f"eval_variants {bad} do not fit a policy trained on {list(self.train_variants)} "
                              f"(state sizes differ); variants it fits: {fits}")
 
     @property
@@ -325,5 +326,5 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
 def get_recipe(name: str, **overrides) -> Recipe:
     """The preset ``name`` with ``overrides`` (Recipe fields); ValueError naming the valid presets otherwise."""
     if name not in RECIPES:
-        raise ValueError(f"Unknown recipe {name!r}. Valid recipes: {list(RECIPES)}")
+        raise ConfigError(f"Unknown recipe {name!r}. Valid recipes: {list(RECIPES)}")
     return replace(RECIPES[name], **overrides)

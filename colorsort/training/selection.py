@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from colorsort.errors import ConfigError
 from colorsort.training import stages
 from colorsort.training.recipes import Recipe
 from colorsort.variants import VALIDATION_SEEDS
@@ -49,5 +50,5 @@ def validate(recipe: Recipe, run: str, checkpoints: list[tuple[int, float, Path]
 def best(points: list[dict]) -> dict:
     """The point with the most successful episodes; ties go to the most boxes sorted right, then the later update."""
     if not points:
-        raise ValueError("no checkpoints to choose from")
+        raise ConfigError("no checkpoints to choose from")
     return max(points, key=lambda p: (p["successes"], p["correct"], p["step"]))

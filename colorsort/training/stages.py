@@ -32,6 +32,7 @@ import sys
 import time
 from pathlib import Path
 
+from colorsort.errors import DataConflictError, StageError
 from colorsort.training.recipes import Recipe
 
 REPO_ID = "local/colorsort-baseline"
@@ -48,7 +49,7 @@ def run(cmd: list[str], log: Path) -> float:
     with log.open("w") as f:
         result = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env={**os.environ, **RUN_ENV})
     if result.returncode != 0:
-        raise RuntimeError(f"exit code {result.returncode}: {shlex.join(cmd)}\n{log.read_text()[-3000:]}")
+        raise StageError(f"exit code {result.returncode}: {shlex.join(cmd)}\n{log.read_text()[-3000:]}")
     return time.perf_counter() - t
 
 
@@ -65,7 +66,7 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     if (root / "meta" / "info.json").is_file() and marker.is_file():
         merged_from = marker.read_text().split()
         if merged_from and merged_from != [p.name for p in parts]:  # an empty marker predates the record
-            raise ValueError(f"{root} was merged from {merged_from}, not {[p.name for p in parts]} "
+            raise DataConflictError(f"{root} was merged from {merged_from}, not {[p.name for p in parts]} "
                              f"(another --train-variants mix): give another --out, or --fresh to rebuild it")
         print(f"reusing {root}")
         return root

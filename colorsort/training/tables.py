@@ -24,6 +24,7 @@ import re
 from collections import Counter
 from pathlib import Path
 
+from colorsort.errors import ConfigError
 from colorsort.training.report import curve_table, scored_checkpoints, scored_minutes, span, summary_table
 
 KINDS = ("table", "curve", "mistakes", "headline")
@@ -46,12 +47,12 @@ def render(scores: dict, kind: str) -> str:
         return summary_table(scores["rows"], label(scores))
     if kind == "curve":
         if not scores.get("curve"):
-            raise ValueError("this baseline's scores.json has no learning curve "
+            raise ConfigError("this baseline's scores.json has no learning curve "
                              "(it saved no checkpoints along the way)")
         return curve_table(scores["curve"])
     if kind == "mistakes":
         return mistakes_table(scores["rows"])
-    raise ValueError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
+    raise ConfigError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
 
 
 def largest_by_variant(rows: list[dict]) -> dict[str, list[dict]]:
@@ -122,7 +123,7 @@ def fill(text: str, root: Path) -> str:
             return f"{m[1]}{note}\n\n{headline(root / m['dir'])}\n\n{m[5]}"
         path = root / m["dir"] / "scores.json"
         if not path.is_file():
-            raise ValueError(f"a scores block names {m['dir']}, which has no scores.json")
+            raise ConfigError(f"a scores block names {m['dir']}, which has no scores.json")
         scores = json.loads(path.read_text())
         note = f"Written by `python demos/baseline_tables.py` from `{m['dir']}/scores.json` ({scores['command']}):"
         return f"{m[1]}{note}\n\n{render(scores, m['kind'])}\n\n{m[5]}"

@@ -1,0 +1,57 @@
+"""The errors ColorSort raises on purpose, and the exit status each gives a console script.
+
+Every one is a subclass of the built-in exception a caller would already catch (``ValueError`` for a bad
+value, ``FileExistsError`` for data that would be overwritten, ``RuntimeError`` for a failed job), so
+``except ValueError`` keeps working; ``except ColorSortError`` catches them all. ``exit_code`` is the one
+place that maps them to exit codes, for every CLI (``colorsort.cli.run.guarded``).
+"""
+
+from __future__ import annotations
+
+
+class ColorSortError(Exception):
+    """Base of every error ColorSort raises on purpose."""
+
+
+class ConfigError(ColorSortError, ValueError):
+    """An invalid setting, argument or name; the message names the valid choices."""
+
+
+class ActionError(ColorSortError, ValueError):
+    """An action the env cannot take: wrong shape or not finite."""
+
+
+class DataConflictError(ColorSortError, ValueError):
+    """Data on disk was made with other settings than the ones asked for (a resume, a reused stage);
+    nothing was changed."""
+
+
+class DataExistsError(ColorSortError, FileExistsError):
+    """The output exists and would be overwritten; nothing was changed."""
+
+
+class StageError(ColorSortError, RuntimeError):
+    """A stage, job or worker failed (its command and the end of its output are in the message)."""
+
+
+class PlanningError(ColorSortError, RuntimeError):
+    """The expert could not plan a motion or a box (ruckig, the box pool)."""
+
+
+USAGE = 2  # bad arguments, or data that would be overwritten or mixed
+FAILED = 1  # the work ran and failed
+INTERRUPTED = 130  # Ctrl-C (128 + SIGINT), as a shell reports it
+
+# the first entry an error is an instance of gives its exit status
+EXIT_CODES: tuple[tuple[type[BaseException], int], ...] = (
+    (KeyboardInterrupt, INTERRUPTED),
+    (ValueError, USAGE),  # ConfigError, ActionError, DataConflictError, and a bad number parsed from a flag
+    (FileExistsError, USAGE),  # DataExistsError
+    (ColorSortError, FAILED),
+    (RuntimeError, FAILED),
+)
+
+
+def exit_code(err: BaseException) -> int:
+    """The exit status a console script ends with on ``err``."""
+    return next((code for kind, code in EXIT_CODES if isinstance(err, kind)), FAILED)
