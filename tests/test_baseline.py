@@ -6,14 +6,18 @@ import re
 import shutil
 import subprocess
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import pytest
+from helpers import exit_status
 
 from colorsort.cli import baseline as colorsort_baseline
 from colorsort.cli.eval import main as eval_main
+from colorsort.data.perturbations.brightness import Brightness
+from colorsort.data.perturbations.late_pass import LatePass
+from colorsort.data.perturbations.late_pick import LatePick
+from colorsort.training import cache
 from colorsort.training.recipes import RECIPES, get_recipe
 
 REPO = Path(__file__).resolve().parents[1]
@@ -37,12 +41,12 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     2 steps with a checkpoint after each, one evaluation episode per variant, the learning curve of the first seed,
     the table of mean and spread over seeds; then the same command again reuses every finished stage."""
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
-    argv = baseline("--recipe", "state", "--demos", "2,3", "--train-variants", "default,distractors",
-                    "--late-pass", "0", "--steps", "2", "--small-steps", "2", "--seeds", "1000,1001",
-                    "--save-every", "1", "--batch-size", "2",
-                    "--eval-variants", "default,jitter",
-                    "--eval-episodes", "1", "--other-episodes", "1", "--curve-episodes", "1",
-                    "--episode-length", "10", "--workers", "1", "--envs", "1", "--out", str(out))
+    argv = baseline("--recipe", "state", "--demos.counts=2,3", "--demos.train_mix=default:1,distractors:1",
+                    "--demos.late_pass=0", "--training.steps=2", "--training.small_steps=2",
+                    "--training.seeds=1000,1001", "--training.save_every=1", "--training.batch_size=2",
+                    "--evaluation.variants=default,jitter", "--evaluation.episodes=1",
+                    "--evaluation.other_episodes=1", "--evaluation.curve_episodes=1",
+                    "--evaluation.episode_length=10", "--workers", "1", "--envs", "1", "--out", str(out))
     first = run(argv + ["--ship", str(ship)], tmp_path, timeout=900)
     assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
 
@@ -53,14 +57,16 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
     assert [p["step"] for p in results["curve"]] == [1, 2]
     assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
-    assert (out / "curve" / "demos-3-2steps-seed1000-chunk10-1.json").is_file()  # step 2's point is the full score's
-    assert not (out / "curve" / "demos-3-2steps-seed1001-chunk10-1.json").exists()  # the curve is the first seed's
+    curve = [p.name for p in (out / "curve").glob("*.json")]  # step 2's point is the full score's
+    assert len(curve) == 1 and re.fullmatch(r"demos-3-\w{8}-2steps-\w{8}-seed1000-chunk10-1-\w{8}\.json", curve[0])
     assert "| default | ACT, state | 3 | 2 steps" in first.stdout
     summary = first.stdout[first.stdout.index("success: mean (min-max over seeds)"):]
     assert "| jitter | ACT, state | 3 | 2 steps" in summary and "0% (0-0%), 2 seeds | 0%, 0% | 1 |" in summary
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    merged = LeRobotDataset("local/colorsort-baseline", root=out / "data" / "demos-3")
+    (merged_root,) = (out / "data").glob("demos-3-*")
+    assert json.loads((merged_root / "stage.json").read_text())["drop_box_state"] is False
+    merged = LeRobotDataset("local/colorsort-baseline", root=merged_root)
     assert merged.num_episodes == 3 and merged.meta.video_keys == []
     for plot in ("success_vs_demos.png", "learning_curve.png"):
         image = cv2.imread(str(out / plot))
@@ -81,20 +87,22 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
 
     # 1 update: the first update of the 2-update runs, taken, not trained, and what lerobot-train makes of 1
-    shorter = run(argv[:argv.index("--steps")] + ["--steps", "1", "--small-steps", "1"]
-                  + argv[argv.index("--seeds"):] + ["--until", "train"], tmp_path, timeout=600)
+    shorter = run([a.replace("steps=2", "steps=1") for a in argv] + ["--until", "train"], tmp_path, timeout=600)
     assert shorter.returncode == 0, shorter.stderr[-3000:]
     assert shorter.stdout.count("taking the first 1 updates of") == 4 and "lerobot-train" not in shorter.stdout
     fresh = tmp_path / "fresh"
     shutil.copytree(out / "data", fresh / "data")
-    trained = run(baseline("--recipe", "state", "--demos", "3", "--train-variants", "default,distractors",
-                           "--late-pass", "0", "--steps", "1", "--seeds", "1000", "--batch-size", "2",
-                           "--workers", "1", "--out", str(fresh), "--until", "train"), tmp_path, timeout=600)
+    trained = run(baseline("--recipe", "state", "--demos.counts=3", "--demos.train_mix=default:1,distractors:1",
+                           "--demos.late_pass=0", "--training.steps=1", "--training.seeds=1000",
+                           "--training.batch_size=2", "--workers", "1", "--out", str(fresh), "--until", "train"),
+                  tmp_path, timeout=600)
     assert "lerobot-train" in trained.stdout, trained.stdout[-3000:] + trained.stderr[-3000:]
     import torch
     from safetensors.torch import load_file
 
-    taken, made = (load_file(root / "train" / "demos-3-1steps-seed1000" / "checkpoints" / "last" / "pretrained_model"
+    (run_name,) = [p.name for p in (fresh / "train").iterdir() if p.is_dir()]
+    assert re.fullmatch(r"demos-3-\w{8}-1steps-\w{8}-seed1000", run_name)
+    taken, made = (load_file(root / "train" / run_name / "checkpoints" / "last" / "pretrained_model"
                              / "model.safetensors") for root in (out, fresh))
     assert taken.keys() == made.keys() and all(torch.equal(taken[k], made[k]) for k in taken)
 
@@ -104,15 +112,17 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     """The camera recipe, tiny: the policy takes the images and the arm's state, never the simulator's box state,
     and colorsort-eval renders exactly the cameras it was trained on and refuses others."""
     out = tmp_path / "camera"
-    result = run(baseline("--recipe", "camera", "--image-size", "32", "--demos", "1", "--train-variants", "default",
-                          "--steps", "2", "--batch-size", "2", "--eval-variants", "default", "--eval-episodes", "1",
-                          "--curve-episodes", "1", "--episode-length", "5", "--workers", "1", "--envs", "1",
-                          "--out", str(out)), tmp_path, timeout=900)
+    result = run(baseline("--recipe", "camera", "--demos.image_size=32", "--demos.counts=1",
+                          "--demos.train_mix=default:1", "--training.steps=2", "--training.batch_size=2",
+                          "--evaluation.variants=default", "--evaluation.episodes=1", "--evaluation.curve_episodes=1",
+                          "--evaluation.episode_length=5", "--workers", "1", "--envs", "1", "--out", str(out)),
+                 tmp_path, timeout=900)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
-    info = json.loads((out / "data" / "demos-1-late100" / "meta" / "info.json").read_text())
+    (data,) = (out / "data").glob("demos-1-*")
+    info = json.loads((data / "meta" / "info.json").read_text())
     assert {"observation.images.sensor", "observation.images.wrist"} <= set(info["features"])
     assert "observation.environment_state" not in info["features"]
-    model = out / "train" / "demos-1-late100-2steps-shift0.1-seed1000" / "checkpoints" / "last" / "pretrained_model"
+    (model,) = (out / "train").glob("demos-1-*-2steps-*-seed1000/checkpoints/last/pretrained_model")
     config = json.loads((model / "config.json").read_text())
     assert json.loads((model / "train_config.json").read_text())["dataset"]["image_transforms"]["enable"]  # shifts
     assert set(config["input_features"]) == {"observation.state", "observation.images.sensor",
@@ -138,19 +148,21 @@ def test_the_tracking_recipe_runs_in_small_and_scores_the_checkpoint_its_validat
     checkpoints play the validation seeds (never the evaluation seeds), and the chosen one is scored on the
     tracking variants."""
     out = tmp_path / "tracking"
-    result = run(baseline("--recipe", "state-tracking", "--demos", "1", "--train-variants", "tracking",
-                          "--boxes-per-episode", "1", "--steps", "2", "--save-every", "1", "--select-episodes", "1",
-                          "--batch-size", "2", "--eval-variants", "tracking,tracking-fast", "--eval-episodes", "1",
-                          "--other-episodes", "1", "--curve-episodes", "1", "--episode-length", "5", "--workers", "1",
-                          "--envs", "1", "--out", str(out)), tmp_path, timeout=900)
+    result = run(baseline("--recipe", "state-tracking", "--demos.counts=1", "--demos.train_mix=tracking:1",
+                          "--demos.boxes_per_episode=1", "--training.steps=2", "--training.save_every=1",
+                          "--evaluation.select_episodes=1", "--training.batch_size=2",
+                          "--evaluation.variants=tracking,tracking-fast", "--evaluation.episodes=1",
+                          "--evaluation.other_episodes=1", "--evaluation.curve_episodes=1",
+                          "--evaluation.episode_length=5", "--workers", "1", "--envs", "1", "--out", str(out)),
+                 tmp_path, timeout=900)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
-    run_dir = out / "train" / "demos-1-2steps-seed1000"
+    (run_dir,) = (out / "train").glob("demos-1-*-2steps-*-seed1000")
     config = json.loads((run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text())
     assert config["input_features"]["observation.state"]["shape"] == [24]
     from colorsort.variants import VALIDATION_SEEDS
 
     chose = sorted(p.name for p in (out / "select").glob("*.json"))
-    assert chose == ["demos-1-2steps-seed1000-ens0.2-1-tracking.json", "demos-1-2steps-seed1000-ens0.2-2-tracking.json"]
+    assert [name.removeprefix(run_dir.name)[:-14] for name in chose] == ["-ens0.2-1-tracking", "-ens0.2-2-tracking"]
     assert all(json.loads((out / "select" / name).read_text())["seeds"] == [VALIDATION_SEEDS[0]] for name in chose)
     results = json.loads((out / "results.json").read_text())
     assert [(r["variant"], r["checkpoint"]) for r in results["rows"]] == [("tracking", 2), ("tracking-fast", 2)]
@@ -162,21 +174,23 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path):
     """camera-diffusion, tiny: lerobot-train's diffusion policy with its GroupNorm ResNet, spatial-softmax keypoints
     and crops; it reads the images and the arm's state only, and colorsort-eval runs it on the cameras it knows."""
     out = tmp_path / "diffusion"
-    result = run(baseline("--recipe", "camera-diffusion", "--demos", "1", "--train-variants", "default",
-                          "--steps", "2", "--batch-size", "2", "--eval-variants", "default", "--eval-episodes", "1",
-                          "--curve-episodes", "1", "--episode-length", "10", "--workers", "1", "--envs", "1",
-                          "--out", str(out)), tmp_path, timeout=900)
+    result = run(baseline("--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=default:1",
+                          "--training.steps=2", "--training.batch_size=2", "--evaluation.variants=default",
+                          "--evaluation.episodes=1", "--evaluation.curve_episodes=1", "--evaluation.episode_length=10",
+                          "--workers", "1", "--envs", "1", "--out", str(out)), tmp_path, timeout=900)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     assert "--policy.type=diffusion" in result.stdout and "| default | diffusion, sensor+wrist | 1 | 2 steps" in \
         result.stdout
-    model = out / "train" / "demos-1-late100-2steps-diffusion-seed1000" / "checkpoints" / "last" / "pretrained_model"
+    (run_dir,) = (out / "train").glob("demos-1-*-2steps-*-seed1000")
+    model = run_dir / "checkpoints" / "last" / "pretrained_model"
     config = json.loads((model / "config.json").read_text())
     assert config["type"] == "diffusion" and set(config["input_features"]) == {
         "observation.state", "observation.images.sensor", "observation.images.wrist"}
     assert config["input_features"]["observation.images.sensor"]["shape"] == [3, 64, 64]
     assert (config["use_group_norm"], config["crop_shape"], config["pretrained_backbone_weights"]) == (
         True, [58, 58], None)
-    report = json.loads((out / "eval" / "demos-1-late100-2steps-diffusion-seed1000-chunk8-default.json").read_text())
+    (report_path,) = (out / "eval").glob(f"{run_dir.name}-chunk8-default-*.json")
+    report = json.loads(report_path.read_text())
     assert report["episodes"] == 1 and report["policy"] == str(model)
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "sensor"]) == 2
 
@@ -194,10 +208,9 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
                 "--policy.use_separate_rgb_encoder_per_camera=false", "--policy.crop_shape=[58,58]",
                 "--policy.down_dims=[32,64]", "--policy.n_obs_steps=1", "--policy.num_inference_steps=10"):
         assert arg in cmd
-    assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", image_size=32), tmp_path,
-                                                          1, 1, tmp_path)
-    assert recipe.run_suffix == "-diffusion" and recipe.policy.execution == "chunk8" and recipe.label.startswith(
-        "diffusion, ")
+    assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", {"demos.image_size": 32}),
+                                                          tmp_path, 1, 1, tmp_path)
+    assert recipe.policy.execution == "chunk8" and recipe.label.startswith("diffusion, ")
     assert not any(a.startswith("--policy.type=act") or "dim_model" in a for a in cmd)
     with pytest.raises(ValueError, match="multiple of"):
         DiffusionSettings(horizon=10)
@@ -205,21 +218,22 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
         DiffusionSettings(n_action_steps=17)
     with pytest.raises(ValueError, match="crop_fraction"):
         DiffusionSettings(crop_fraction=0.2)
-    assert main(["--recipe", "camera-diffusion", "--lr-schedule", "cosine", "--out", str(tmp_path)]) == 2
+    assert exit_status(main, ["--recipe", "camera-diffusion", "--policy.lr_schedule=cosine",
+                              "--out", str(tmp_path)]) == 2
 
 
 def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(tmp_path):
-    """``--lr``: ACT's rate and its backbone's in the ``lerobot-train`` command, a run folder of its own (a run at
-    another rate is never reused), and a one-line refusal for a policy that keeps LeRobot's rate."""
-    from colorsort.training.stages import train_command
+    """``--policy.optimizer_lr``: ACT's rate in the ``lerobot-train`` command and a run folder of its own (a run at
+    another rate is never reused); a policy without the field has no such flag."""
+    from colorsort.training.stages import train_command, train_settings
 
-    args = colorsort_baseline.parse_args(["--recipe", "camera", "--lr", "3e-4"])
-    recipe = get_recipe("camera", **colorsort_baseline.overrides(args))
+    _, recipe = colorsort_baseline.parse_args(["--recipe", "camera", "--policy.optimizer_lr=3e-4",
+                                               "--policy.optimizer_lr_backbone=3e-4"])
     cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
     assert "--policy.optimizer_lr=0.0003" in cmd and "--policy.optimizer_lr_backbone=0.0003" in cmd
-    assert recipe.run_suffix == "-lr0.0003-shift0.1" and get_recipe("camera").run_suffix == "-shift0.1"
-    assert get_recipe("camera-snapshot").run_suffix == "-lr0.0003-shift0.1"  # the preset's own rate, named too
-    assert colorsort_baseline.main(["--recipe", "camera-diffusion", "--lr", "3e-4", "--out", str(tmp_path)]) == 2
+    assert cache.key(train_settings(recipe)) != cache.key(train_settings(get_recipe("camera")))
+    assert exit_status(colorsort_baseline.main, ["--recipe", "camera-diffusion", "--policy.optimizer_lr=3e-4",
+                                                 "--out", str(tmp_path)]) == 2
 
 
 def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
@@ -232,10 +246,9 @@ def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
     from colorsort.training.stages import train_command
 
     shifted = get_recipe("camera")
-    args = shifted.augment_args()
-    assert shifted.image_shift == 0.1 and shifted.run_suffix == "-shift0.1"
-    plain = get_recipe("camera", image_shift=0)
-    assert plain.augment_args() == [] and plain.run_suffix == ""
+    args = shifted.training.augment_args()
+    assert shifted.training.image_shift == 0.1
+    assert get_recipe("camera", {"training.image_shift": 0}).training.augment_args() == []
     assert set(args) <= set(train_command(shifted, tmp_path, 10, 1000, tmp_path / "run"))
     config = draccus.parse(DatasetConfig, args=["--repo_id=local/x", *[a.replace("--dataset.", "--") for a in args]])
     transforms = ImageTransforms(config.image_transforms)
@@ -245,9 +258,9 @@ def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
     assert all(m.shape == image.shape and m.sum() == image.sum() for m in moved)  # moved whole, no border reached
     offsets = {tuple(torch.nonzero(m[0])[0].tolist()) for m in moved}
     assert len(offsets) > 1 and all(abs(r - 12) <= 3 and abs(c - 12) <= 3 for r, c in offsets)  # 0.1 of 32 px
-    for bad in (dict(image_shift=0.5), dict(image_shift=-0.1), dict(image_shift=0.1, cameras=())):
+    for bad in ({"training.image_shift": 0.5}, {"training.image_shift": -0.1}, {"demos.cameras": ()}):
         with pytest.raises(ValueError, match="image_shift"):
-            get_recipe("camera", **bad)
+            get_recipe("camera", bad)
 
 
 def test_relit_training_images_vary_as_the_lighting_variant_but_keep_every_box_colour(tmp_path):
@@ -260,11 +273,10 @@ def test_relit_training_images_vary_as_the_lighting_variant_but_keep_every_box_c
 
     from colorsort.training.stages import train_command
 
-    relit = get_recipe("camera", image_relight=True)
-    args = relit.augment_args()
-    assert relit.run_suffix == "-shift0.1-relit" and "--dataset.image_transforms.max_num_transforms=3" in args
+    _, relit = colorsort_baseline.parse_args(["--recipe", "camera", "--training.image_relight=true"])
+    args = relit.training.augment_args()
+    assert "--dataset.image_transforms.max_num_transforms=3" in args
     assert set(args) <= set(train_command(relit, tmp_path, 10, 1000, tmp_path / "run"))
-    assert get_recipe("camera", image_shift=0, image_relight=True).run_suffix == "-relit"
     config = draccus.parse(DatasetConfig, args=["--repo_id=local/x", *[a.replace("--dataset.", "--") for a in args]])
     transforms = ImageTransforms(config.image_transforms)
     image = torch.full((3, 32, 32), 0.4)  # a grey belt around three saturated boxes
@@ -281,14 +293,11 @@ def test_relit_training_images_vary_as_the_lighting_variant_but_keep_every_box_c
             box = m[:, r + 3:r + 5, c + 3:c + 5].mean(dim=(1, 2))  # the middle of the box, inside any shift
             assert int(box.argmax()) == channel
     with pytest.raises(ValueError, match="image_relight"):
-        get_recipe("state", image_relight=True)
-    args = colorsort_baseline.parse_args(["--recipe", "camera", "--relight"])
-    assert get_recipe("camera", **colorsort_baseline.overrides(args)).image_relight
+        get_recipe("state", {"training.image_relight": True})
 
 
 def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):
-    """A run folder named ``...-shift0.1-seed1000`` has a dot in it; its timing file must not be shared with
-    seed 1001's (a learning curve measures minutes from that run's start)."""
+    """Each seed's run has a timing file of its own (a learning curve measures minutes from that run's start)."""
     from colorsort.training import stages
 
     def fake_training(cmd: list[str], log: Path) -> float:  # what lerobot-train leaves, in no time
@@ -299,12 +308,14 @@ def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, m
         return 60.0 * (1 + earlier)
 
     monkeypatch.setattr(stages, "run", fake_training)
-    recipe = get_recipe("camera", image_shift=0.1)
+    recipe = get_recipe("camera")
     first = stages.train(recipe, tmp_path / "demos-48", 100, 1000, tmp_path)
     second = stages.train(recipe, tmp_path / "demos-48", 100, 1001, tmp_path)
     assert first[1]["wall_s"] == 60.0 and second[1]["wall_s"] == 120.0
+    key = cache.key(stages.train_settings(recipe))
     assert sorted(p.name for p in (tmp_path / "train").glob("*.json")) == [
-        "demos-48-100steps-shift0.1-seed1000.json", "demos-48-100steps-shift0.1-seed1001.json"]
+        f"demos-48-100steps-{key}-seed1000.json", f"demos-48-100steps-{key}-seed1001.json"]
+    assert first[1]["settings"] == stages.train_settings(recipe)
     assert stages.train(recipe, tmp_path / "demos-48", 100, 1000, tmp_path) == first  # reused, its own timing
 
 
@@ -335,15 +346,17 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
     trained = []
     monkeypatch.setattr(stages, "run", lambda cmd, log: trained.append(cmd) or 0.0)
     train = tmp_path / "train"
-    fake_run(train / "demos-8-3steps-shift0.1-seed1000", 3, None, started=1e9, seconds_each=600)
-    fake_run(train / "demos-8-5steps-shift0.1-seed1000", 5, None, started=2e9, seconds_each=60)
-    fake_run(train / "demos-8-3steps-cos-shift0.1-seed1001", 3, "cosine_annealing_with_warmup", 1e9, 60)
-    fake_run(train / "demos-8-3steps-shift0.1-seed1002", 3, None, started=1e9, seconds_each=60)
-    recipe = get_recipe("camera", image_shift=0.1)
+    recipe = get_recipe("camera")
+    cosine = get_recipe("camera", {"policy.lr_schedule": "cosine"})
+    key, cos = cache.key(stages.train_settings(recipe)), cache.key(stages.train_settings(cosine))
+    fake_run(train / f"demos-8-3steps-{key}-seed1000", 3, None, started=1e9, seconds_each=600)
+    fake_run(train / f"demos-8-5steps-{key}-seed1000", 5, None, started=2e9, seconds_each=60)
+    fake_run(train / f"demos-8-3steps-{cos}-seed1001", 3, "cosine_annealing_with_warmup", 1e9, 60)
+    fake_run(train / f"demos-8-3steps-{key}-seed1002", 3, None, started=1e9, seconds_each=60)
 
     run_dir, timing = stages.train(recipe, tmp_path / "demos-8", 2, 1000, tmp_path)
-    assert not trained and run_dir.name == "demos-8-2steps-shift0.1-seed1000"
-    assert timing == {"started": 1e9, "wall_s": 1200.0, "first_updates_of": "demos-8-3steps-shift0.1-seed1000"}
+    assert not trained and run_dir.name == f"demos-8-2steps-{key}-seed1000"
+    assert timing == {"started": 1e9, "wall_s": 1200.0, "first_updates_of": f"demos-8-3steps-{key}-seed1000"}
     assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["000001", "000002", "last"]
     assert (run_dir / "checkpoints" / "last" / "pretrained_model" / "model.safetensors").read_text() == \
         "weights after 2"
@@ -352,127 +365,133 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
 
     stages.train(recipe, tmp_path / "demos-8", 4, 1000, tmp_path)  # the 5-update run: the shortest with 4
     assert not trained
-    stages.train(get_recipe("camera", image_shift=0.1, policy=replace(recipe.policy, lr_schedule="cosine")),
-                 tmp_path / "demos-8", 2, 1001, tmp_path)
+    stages.train(cosine, tmp_path / "demos-8", 2, 1001, tmp_path)
     stages.train(recipe, tmp_path / "demos-8", 2, 1001, tmp_path)  # seed 1001's only run is another recipe's
     stages.train(recipe, tmp_path / "demos-8", 6, 1002, tmp_path)  # nothing longer than 6
     assert [next(a for a in cmd if a.startswith("--steps=")) for cmd in trained] == ["--steps=2"] * 2 + ["--steps=6"]
 
 
 def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
-    """``boxes_by_variant``: the seed variant's demos hold one box each, in a part named for it, merged."""
+    """``boxes_by_variant``: the seed variant's demos hold one box each, in a part of their own, merged; the merged
+    set's key comes from its parts, so another mix is another set, never the seed variant's trained on."""
     from colorsort.training.stages import collect, size
 
-    recipe = get_recipe("state", train_mix=(("seed", 1),), demos=(1,), boxes_by_variant=(("seed", 1),), late_pass=0)
+    recipe = get_recipe("state", {"demos.train_mix": (("seed", 1.0),), "demos.counts": (1,),
+                                  "demos.boxes_by_variant": (("seed", 1),), "demos.late_pass": LatePass(0)})
     root = collect(recipe, 1, tmp_path, workers=1)
-    part = tmp_path / "data" / "seed-1-b1"
+    (part,) = (tmp_path / "data").glob("seed-1-*")
     assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["boxes_per_episode"] == 1
+    assert "--boxes-per-episode" in json.loads((part / "stage.json").read_text())["colorsort-collect"]
     assert size(root) == size(part) and size(root)[0] == 1
-    assert (root / "meta" / "complete").read_text().split() == ["seed-1-b1"]
+    assert (root / "meta" / "complete").read_text().split() == [part.name]
+    assert collect(recipe, 1, tmp_path, workers=1) == root  # reused
 
-    other_mix = get_recipe("state", train_mix=(("default", 1),), demos=(1,), late_pass=0)
-    with pytest.raises(ValueError, match=r"merged from \['seed-1-b1'\].*--fresh"):
-        collect(other_mix, 1, tmp_path, workers=1)  # demos-1 is seed's: never trained on as default's
-    assert not (tmp_path / "data" / "default-1").exists() and size(root)[0] == 1
-    assert colorsort_baseline.main(["--recipe", "state", "--train-variants", "default", "--demos", "1",
-                                    "--late-pass", "0", "--out", str(tmp_path), "--until", "data"]) == 2
+    other_mix = get_recipe("state", {"demos.train_mix": (("default", 1.0),), "demos.counts": (1,)})
+    other = collect(other_mix, 1, tmp_path, workers=1)
+    assert other != root and size(root)[0] == size(other)[0] == 1
 
 
-def test_a_recipe_without_the_turn_collects_its_demos_with_no_turn(tmp_path):
-    """``turn_to_box=False`` (``--no-turn``) reaches colorsort-collect and names the parts and the set."""
-    from colorsort.training.stages import collect, size
+def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_path):
+    """Each perturbation (``--demos.<name>``) reaches colorsort-collect for the training variants it applies to
+    and keys their parts: dim lights for the random-lights variant alone, late picks for both; ``--no-turn`` too.
+    One that applies to no training variant (late picks on a tracking belt, dim lights without a lit variant) is
+    refused, and a bad value names its range."""
+    from colorsort.training.stages import collect, collect_command, size
 
-    assert colorsort_baseline.overrides(colorsort_baseline.parse_args(["--no-turn"])) == {"turn_to_box": False}
-    recipe = get_recipe("state", train_mix=(("jitter", 1),), demos=(1,), boxes_per_episode=1, late_pass=0,
-                        turn_to_box=False)
-    root = collect(recipe, 1, tmp_path, workers=1)
-    part = tmp_path / "data" / "jitter-1-noturn"
-    assert root.name == "demos-1-noturn"
-    assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["turn_to_box"] is False
-    assert size(root) == size(part) and size(root)[0] == 1
-
-
-def test_a_recipe_with_demo_brightness_collects_its_lighting_demos_under_those_lights(tmp_path):
-    """``demo_brightness`` (``--demo-brightness``) reaches colorsort-collect for the random-lights variants
-    alone and names their parts and the set; a mix without one is refused."""
-    from colorsort.training.stages import collect, part_name, size
-
-    args = colorsort_baseline.parse_args(["--demo-brightness", "0.45,0.75"])
-    assert colorsort_baseline.overrides(args) == {"demo_brightness": (0.45, 0.75)}
-    recipe = get_recipe("state", train_mix=(("lighting", 1), ("default", 1)), demos=(2,), boxes_per_episode=1,
-                        late_pass=0, demo_brightness=(0.45, 0.75))
-    assert (part_name(recipe, "lighting", 1), part_name(recipe, "default", 1)) == ("lighting-1-lit0.45-0.75",
-                                                                                  "default-1")
+    _, recipe = colorsort_baseline.parse_args([
+        "--recipe", "state", "--demos.train_mix=lighting:1,default:1", "--demos.counts=2",
+        "--demos.boxes_per_episode=1", "--demos.late_pass=0", "--demos.brightness=0.45,0.75", "--demos.late_pick=5",
+        "--demos.turn_to_box=false"])
+    assert [p.name for p in recipe.demos.perturbations] == ["brightness", "late_pick"]
+    assert "--brightness=0.45,0.75" not in collect_command(recipe, "default", 1, 1, 1)
     root = collect(recipe, 2, tmp_path, workers=1)
-    assert root.name == "demos-2-lit0.45-0.75" and size(root)[0] == 2
-    settings = {p: json.loads((tmp_path / "data" / p / "meta" / "colorsort.json").read_text())["settings"]
-                for p in ("lighting-1-lit0.45-0.75", "default-1")}
-    assert settings["lighting-1-lit0.45-0.75"]["brightness"] == [0.45, 0.75]
-    assert "brightness" not in settings["default-1"]
-    with pytest.raises(ValueError, match="add 'lighting'"):
-        get_recipe("state", demo_brightness=(0.45, 0.75))
-    with pytest.raises(ValueError, match="brightness"):
-        get_recipe("camera-snapshot", demo_brightness=(0.9, 0.5))
-
-
-def test_a_recipe_with_late_picks_collects_its_demos_with_them(tmp_path):
-    """``late_pick`` (``--late-pick``) reaches colorsort-collect and names the parts and the set; a recipe on a
-    tracking belt, where a held pick would miss its moving box, is refused."""
-    from colorsort.training.stages import collect, size
-
-    args = colorsort_baseline.parse_args(["--late-pick", "30"])
-    assert colorsort_baseline.overrides(args) == {"late_pick": 30}
-    recipe = get_recipe("state", train_mix=(("default", 1),), demos=(1,), boxes_per_episode=1, late_pass=0,
-                        late_pick=5)
-    root = collect(recipe, 1, tmp_path, workers=1)
-    assert root.name == "demos-1-pick5" and size(root)[0] == 1
-    part = tmp_path / "data" / "default-1-pick5"
-    assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["late_pick"] == 5
-    assert get_recipe("camera-snapshot", late_pick=30).data_suffix == "-late100-pick30"
+    assert size(root)[0] == 2
+    settings = {p.name.split("-")[0]: json.loads((p / "meta" / "colorsort.json").read_text())["settings"]
+                for p in (tmp_path / "data").glob("*-1-*")}
+    assert settings["lighting"]["brightness"] == [0.45, 0.75] and "brightness" not in settings["default"]
+    assert settings["lighting"]["late_pick"] == settings["default"]["late_pick"] == 5
+    assert settings["lighting"]["turn_to_box"] is settings["default"]["turn_to_box"] is False
     with pytest.raises(ValueError, match="tracking belt"):
-        get_recipe("camera-tracking", late_pick=30)
+        get_recipe("camera-tracking", {"demos.late_pick": LatePick(30)})
+    with pytest.raises(ValueError, match="lighting"):
+        get_recipe("state", {"demos.brightness": Brightness(0.45, 0.75)})
+    with pytest.raises(ValueError, match="brightness"):
+        colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--demos.brightness=0.9,0.5"])
     with pytest.raises(ValueError, match="late_pick"):
-        get_recipe("camera-snapshot", late_pick=101)
+        colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--demos.late_pick=101"])
 
 
 def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
     from colorsort.cli.baseline import main
 
-    assert main(["--recipe", "nope", "--out", str(tmp_path)]) == 2
-    assert "Valid recipes" in capsys.readouterr().err
-    assert main(["--train-variants", "default,nope", "--out", str(tmp_path)]) == 2
-    assert "Valid variants" in capsys.readouterr().err
-    assert main(["--demos", "50,20", "--out", str(tmp_path)]) == 2
-    assert "increasing" in capsys.readouterr().err
-    assert main(["--cameras", "top", "--out", str(tmp_path)]) == 2
-    assert "Valid cameras" in capsys.readouterr().err
-    assert main(["--train-variants", "default:x", "--out", str(tmp_path)]) == 2
-    with pytest.raises(SystemExit):
-        main(["--until", "later"])
+    for argv, named in ((["--recipe", "nope"], "Valid recipes"),
+                        (["--demos.train_mix=default:1,nope:1"], "Valid variants"),
+                        (["--demos.counts=50,20"], "increasing"),
+                        (["--demos.cameras=top"], "Valid cameras"),
+                        (["--demos.train_mix=default:x"], "not a valid float"),
+                        (["--training.image_relight=maybe"], "true or false"),
+                        (["--training.device=tpu"], "valid devices")):
+        assert main([*argv, "--out", str(tmp_path)]) == 2, argv
+        assert named in capsys.readouterr().err, argv
+    assert exit_status(main, ["--until", "later"]) == 2
+
+
+def test_baseline_help_shows_a_flag_for_every_recipe_field_and_perturbation():
+    """``colorsort-baseline --help``: flags generated from the recipe's sections (each with the chosen recipe's
+    value) and the perturbation registry; ``Recipe.override`` takes what they parse to, and refuses an unknown key."""
+    from dataclasses import fields
+
+    from colorsort.data.perturbations import PERTURBATIONS
+
+    help_text = subprocess.run(baseline("--recipe", "camera-snapshot", "--help"), capture_output=True, text=True,
+                               env={**os.environ, "COLUMNS": "1000"}, timeout=60).stdout
+    recipe = get_recipe("camera-snapshot")
+    for section in ("demos", "policy", "training", "evaluation"):
+        for f in fields(getattr(recipe, section)):
+            if f.init and f.name != "perturbations":
+                assert f"--{section}.{f.name}" in help_text, (section, f.name)
+    assert all(f"--demos.{name}" in help_text for name in PERTURBATIONS)
+    assert "(recipe 'camera-snapshot': 4000)" in help_text and "(recipe 'camera-snapshot': 10)" in help_text
+    with pytest.raises(ValueError, match="Valid settings"):
+        recipe.override({"training.stpes": 10})
+
+
+def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
+    stored = get_recipe("camera-snapshot").to_json()
+    assert json.loads(json.dumps(stored)) == stored
+    assert stored["demos"]["perturbations"] == {"brightness": [0.45, 0.75], "late_pass": 100, "late_pick": 10}
+    assert stored["policy"]["type"] == "act" and stored["training"]["steps"] == 4000
+    from colorsort.training.tables import label
+
+    assert label({"recipe": stored}) == "ACT, snapshot"
+    assert label({"recipe": {"cameras": ["sensor", "wrist"]}}) == "ACT, sensor+wrist"  # the shipped, flat
 
 
 def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_state():
-    assert get_recipe("state").split(40) == {"default": 8, "jitter": 8, "fast": 8, "distractors": 16}
+    assert get_recipe("state").demos.split(40) == {"default": 8, "jitter": 8, "fast": 8, "distractors": 16}
     camera = get_recipe("camera")
-    assert camera.split(48) == {"default": 8, "lighting": 8, "jitter": 8, "fast": 8, "distractors": 16}
-    one_box_seed = get_recipe("camera", train_mix=camera.train_mix + (("seed", 1),), boxes_by_variant=(("seed", 1),))
-    assert (one_box_seed.boxes("seed"), one_box_seed.boxes("jitter")) == (1, camera.boxes_per_episode)
-    assert sum(camera.split(7).values()) == 7
-    assert (camera.updates(48, 1000), camera.updates(10, 1000)) == (camera.steps, camera.small_steps)
+    assert camera.demos.split(48) == {"default": 8, "lighting": 8, "jitter": 8, "fast": 8, "distractors": 16}
+    one_box_seed = get_recipe("camera", {"demos.train_mix": camera.demos.train_mix + (("seed", 1),),
+                                         "demos.boxes_by_variant": (("seed", 1),)})
+    assert (one_box_seed.demos.boxes("seed"), one_box_seed.demos.boxes("jitter")) == (1, camera.demos.boxes_per_episode)
+    assert sum(camera.demos.split(7).values()) == 7
+    training = camera.training
+    assert (training.updates(True, 1000), training.updates(False, 1000)) == (training.steps, training.small_steps)
     with pytest.raises(ValueError, match="at least 1 box"):
-        get_recipe("camera", boxes_by_variant=(("seed", 0),))
+        get_recipe("camera", {"demos.boxes_by_variant": (("seed", 0),)})
     with pytest.raises(ValueError, match="Valid variants"):
-        get_recipe("camera", boxes_by_variant=(("nope", 1),))
-    trained_alike = get_recipe("state", demos=(8, 40), passes=10.0, batch_size=64)
-    assert (trained_alike.updates(8, 2560), trained_alike.updates(40, 12800)) == (400, 2000)
+        get_recipe("camera", {"demos.boxes_by_variant": (("nope", 1),)})
+    alike = get_recipe("state", {"demos.counts": (8, 40), "training.passes": 10.0, "training.batch_size": 64})
+    assert (alike.training.updates(False, 2560), alike.training.updates(True, 12800)) == (400, 2000)
     with pytest.raises(ValueError, match="seeds"):
-        get_recipe("state", seeds=(1, 1))
+        get_recipe("state", {"training.seeds": (1, 1)})
     with pytest.raises(ValueError, match="passes"):
-        get_recipe("state", passes=0.0)
+        get_recipe("state", {"training.passes": 0.0})
     for recipe in RECIPES.values():
-        assert recipe.main_variant in recipe.eval_variants
+        assert recipe.evaluation.main_variant in recipe.evaluation.variants
     tracking = get_recipe("camera-tracking")
-    assert set(tracking.eval_variants) == {"tracking", "tracking-jitter", "tracking-fast"} and tracking.cameras
+    assert set(tracking.evaluation.variants) == {"tracking", "tracking-jitter", "tracking-fast"}
+    assert tracking.demos.cameras
 
 
 def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_the_recipes_inference_settings(
@@ -628,7 +647,7 @@ def test_a_recipe_scored_on_a_variant_its_policy_cannot_run_on_gets_a_one_line_e
     from colorsort.cli.baseline import main as baseline_main
 
     out = tmp_path / "never"
-    assert baseline_main(["--recipe", "state", "--eval-variants", "default,tracking", "--out", str(out)]) == 2
+    assert baseline_main(["--recipe", "state", "--evaluation.variants=default,tracking", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "['tracking'] do not fit" in err and "'distractors'" in err
     assert not out.exists()
@@ -761,14 +780,17 @@ def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
     assert render({"rows": clean}, "mistakes").endswith("| every variant | 0 | |")
 
 
-def test_a_shipped_readme_says_how_the_demos_were_held_back():
-    """The README's demo line names the recipe's late passes and late picks, and nothing when it has neither."""
-    from colorsort.training.ship import holds
+def test_a_shipped_readme_says_how_the_demos_were_made():
+    """The README's demo line gives each variant's count, with the perturbations that act on some variants only
+    after them, and those on every variant once at the end, each as it describes itself."""
+    from colorsort.training.ship import demo_line
 
-    assert holds(get_recipe("camera-snapshot")) == "; every belt pass held back 0-100 steps, every pick 0-10"
-    assert holds(get_recipe("state", late_pass=0, late_pick=5)) == "; every pick held back 0-5 steps"
-    assert holds(get_recipe("camera-tracking")) == ""
-    assert holds(get_recipe("camera-snapshot")) + ")," in (SHIPPED["act-camera-snapshot"] / "README.md").read_text()
+    assert demo_line(get_recipe("camera-snapshot")) == (
+        "8 on default, 8 on lighting under lights of brightness x0.45-0.75, 8 on jitter, 8 on fast, 16 on "
+        "distractors; 3 boxes each; every belt pass held back 0-100 steps; every pick held back 0-10 steps")
+    assert demo_line(get_recipe("state", {"demos.late_pass": LatePass(0), "demos.late_pick": LatePick(5)})) == (
+        "8 on default, 8 on jitter, 8 on fast, 16 on distractors; 3 boxes each; every pick held back 0-5 steps")
+    assert demo_line(get_recipe("camera-tracking")) == "24 on tracking, 24 on tracking-jitter; 5 boxes each"
 
 
 def test_first_box_delay_is_the_median_over_the_seeds_both_runs_placed_a_box(tmp_path):
@@ -895,7 +917,7 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
         (1000, 1): 1, (1000, 2): 4, (1000, 3): 2, (1001, 1): 0, (1001, 2): 3, (1001, 3): 3}
     evaluated: list[tuple[str, str, int | None]] = []
 
-    def fake_evaluate(recipe, model, variant, episodes, path, envs, log, first_seed=None):
+    def fake_evaluate(recipe, model, variant, episodes, stem, envs, log_dir, first_seed=None):
         step = int(Path(model).parent.name) if Path(model).parent.name.isdigit() else 3
         seed = int(str(model).split("-seed")[1][:4])
         evaluated.append((Path(model).parent.name, variant, first_seed))
@@ -918,9 +940,10 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
     monkeypatch.setattr(stages, "train", fake_train)
     monkeypatch.setattr(stages, "evaluate", fake_evaluate)
     monkeypatch.setattr(ship, "parameters", lambda model: 1000)  # the fake runs' weights are text
-    recipe = get_recipe("state-tracking", demos=(4,), steps=3, save_every=1, select_episodes=2, seeds=(1000, 1001),
-                        eval_variants=("tracking", "tracking-jitter"), eval_episodes=4, other_episodes=4,
-                        curve_episodes=4)
+    recipe = get_recipe("state-tracking", {
+        "demos.counts": (4,), "training.steps": 3, "training.save_every": 1, "evaluation.select_episodes": 2,
+        "training.seeds": (1000, 1001), "evaluation.variants": ("tracking", "tracking-jitter"),
+        "evaluation.episodes": 4, "evaluation.other_episodes": 4, "evaluation.curve_episodes": 4})
     ship_to = tmp_path / "shipped"
     results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / "out", envs=1), "cmd", ship_to)
 
@@ -940,6 +963,6 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
     assert "scored at 2/3 after 2/3 min (chosen on validation seeds)" in readme and "| 1000 | 2 (chosen) |" in readme
     assert f"({first} on, never scored" in readme
     with pytest.raises(ValueError, match="save_every"):
-        get_recipe("camera-tracking", save_every=0)
+        get_recipe("camera-tracking", {"training.save_every": 0})
     with pytest.raises(ValueError, match="validation seeds"):
-        get_recipe("camera-tracking", select_episodes=len(VALIDATION_SEEDS) + 1)
+        get_recipe("camera-tracking", {"evaluation.select_episodes": len(VALIDATION_SEEDS) + 1})

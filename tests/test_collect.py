@@ -16,6 +16,10 @@ from colorsort.cli.collect import main
 from colorsort.data import recorder as recorder_module
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
+from colorsort.data.perturbations import PERTURBATIONS, Step, parse, perturbed
+from colorsort.data.perturbations.brightness import Brightness
+from colorsort.data.perturbations.late_pass import LatePass
+from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.data.store import MARKER
 from colorsort.executors.base import chunks
 from colorsort.expert.sorter import SortingExpert
@@ -38,13 +42,43 @@ def snapshot(root):
     (dict(preset="nope"), "Valid presets"), (dict(robot="KUKA"), "Valid robots"),
     (dict(image_size=(63, 64)), "even"), (dict(workers=0), "valid values"),
     (dict(resume=True, overwrite=True), "not both"),
-    (dict(brightness=(0.5, 0.9)), "lighting"), (dict(variant="jitter", brightness=(0.5, 0.9)), "lighting"),
-    (dict(variant="lighting", brightness=(0.9, 0.5)), "brightness"),
-    (dict(variant="lighting", brightness=(0.01, 0.5)), "brightness"),
+    (dict(perturbations=(Brightness(0.5, 0.9),)), "lighting"),
+    (dict(variant="jitter", perturbations=(Brightness(0.5, 0.9),)), "lighting"),
+    (dict(variant="lighting", perturbations=(Brightness(0.5, 0.9), Brightness(0.6, 0.9))), "twice"),
+    (dict(preset="tracking", perturbations=(LatePick(5),)), "tracking belt"),
 ])
 def test_bad_settings_name_the_valid_choices(kwargs, match):
     with pytest.raises(ValueError, match=match):
         CollectConfig(**kwargs)
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: Brightness(0.9, 0.5), "brightness"), (lambda: Brightness(0.01, 0.5), "brightness"),
+    (lambda: LatePick(101), "late_pick"), (lambda: LatePick(-1), "late_pick"), (lambda: LatePass(-1), "late_pass"),
+    (lambda: parse("late_pass", "many"), "late_pass"), (lambda: parse("brightness", "dim"), "low,high"),
+    (lambda: parse("early_pick", "3"), "Valid perturbations"),
+])
+def test_a_perturbation_checks_its_own_settings_once(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_perturbations_are_one_registry_with_one_protocol():
+    """Each registered perturbation parses what it prints, tags and describes itself, and records its settings;
+    an inactive one (0 steps) is dropped from a configuration, and they keep the order of their names."""
+    assert set(PERTURBATIONS) == {"brightness", "late_pass", "late_pick"}
+    for example in ("0.45,0.75", "100", "10"):
+        for name, kind in PERTURBATIONS.items():
+            try:
+                p = kind.parse(example)
+            except ValueError:
+                continue
+            assert p.name == name and kind.parse(p.text) == p and p.tag and p.describe()
+            json.dumps(p.settings())
+    config = CollectConfig(variant="lighting", perturbations=(LatePick(5), LatePass(0), Brightness(0.45, 0.75)))
+    assert [p.name for p in config.perturbations] == ["brightness", "late_pick"]
+    assert config.settings()["brightness"] == [0.45, 0.75] and config.settings()["late_pick"] == 5
+    assert "late_pass" not in config.settings() and "late_pick" not in CollectConfig().settings()
 
 
 def test_image_size_and_split():
@@ -184,8 +218,6 @@ def test_cli_records_several_boxes_per_episode_and_prints_the_summary(tmp_path, 
 def test_state_only_dataset_loads_in_lerobot_and_trains(tmp_path):
     """--cameras none: no video features (the expert still takes its own sensor photo), and lerobot-train runs on it."""
     import os
-    import subprocess
-    import sys
     from pathlib import Path
 
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
@@ -246,21 +278,20 @@ def test_a_variant_and_a_preset_or_robot_are_not_given_together(capsys):
 def test_late_pass_holds_the_belt_back_and_stores_the_experts_action(tmp_path):
     """Seed 2 of distractors starts with a purple box: the expert lets it through at once; with
     --late-pass the belt stays stopped for the drawn steps while the stored action says belt-pass."""
-    from colorsort.data.late_pass import LatePass
+    from colorsort.data.perturbations import late_pass
 
-    def late_frames(late_pass):
-        out = tmp_path / f"late{late_pass}"
-        summary = collect(CollectConfig(variant="distractors", episodes=1, seed=2, cameras=(), late_pass=late_pass,
-                                        out=str(out)), progress=False, log=lambda _: None)
+    def late_frames(steps):
+        out = tmp_path / f"late{steps}"
+        summary = collect(CollectConfig(variant="distractors", episodes=1, seed=2, cameras=(),
+                                        perturbations=(LatePass(steps),), out=str(out)),
+                          progress=False, log=lambda _: None)
         assert summary.kept == 1  # the purple box left the belt; nothing was misplaced or dropped
         table = data_table(out)
         state, action = np.array(table["observation.state"]), np.array(table["action"])
         ray, running = state[:, -2] > 0.5, state[:, -1] > 0.5
         return int(np.sum((action[:, -1] > 0) & ray & ~running)), int(np.sum(action[:, -1] > 0))
 
-    drawn = LatePass(9)
-    drawn.reset(2)
-    delay = int(drawn.rng.integers(0, 10))
+    delay = int(np.random.default_rng([2, late_pass.STREAM]).integers(0, 10))  # the hook's first draw, seed 2
     assert delay > 0
     (plain_late, plain_on), (late, on) = late_frames(0), late_frames(9)
     assert plain_late == 1  # the expert's own let-through: one frame of "box at the ray, belt stopped"
@@ -272,12 +303,13 @@ def test_late_pick_holds_the_arm_at_a_picks_start_and_stores_the_experts_approac
     """Seed 0 of default starts with a box of a bin colour: with --late-pick the arm stays where it waited for the
     drawn steps while every stored action is the expert's first approach action, then the expert goes on with
     its plan unchanged and the box is placed; without, one such frame. The same box either way."""
-    from colorsort.data.late_pick import LatePick
+    from colorsort.data.perturbations import late_pick
 
-    def waiting_frames(late_pick):
-        out = tmp_path / f"pick{late_pick}"
+    def waiting_frames(steps):
+        out = tmp_path / f"pick{steps}"
         summary = collect(CollectConfig(variant="default", episodes=1, boxes_per_episode=1, seed=0, cameras=(),
-                                        late_pick=late_pick, out=str(out)), progress=False, log=lambda _: None)
+                                        perturbations=(LatePick(steps),), out=str(out)),
+                          progress=False, log=lambda _: None)
         assert summary.kept == 1  # the box went to its bin
         table = data_table(out)
         state, action = np.array(table["observation.state"]), np.array(table["action"])
@@ -286,9 +318,7 @@ def test_late_pick_holds_the_arm_at_a_picks_start_and_stores_the_experts_approac
         at_ray = np.flatnonzero(ray & ~running & ~suction & still)
         return state, action, at_ray, np.array(table["observation.environment_state"])[0]
 
-    drawn = LatePick(9)
-    drawn.reset(0)
-    delay = int(drawn.rng.integers(0, 10))
+    delay = int(np.random.default_rng([0, late_pick.STREAM]).integers(0, 10))  # the hook's first draw, seed 0
     assert delay > 0
     (state0, action0, plain, box0), (state, action, held, box) = waiting_frames(0), waiting_frames(9)
     np.testing.assert_array_equal(box, box0)  # the same box, where the plain run had it
@@ -299,49 +329,48 @@ def test_late_pick_holds_the_arm_at_a_picks_start_and_stores_the_experts_approac
     assert np.abs(state[held[-1], :6] - state[held[0], :6]).max() < min(1e-3, went / 10)  # this one did not go
     after = held[-1] + 1  # from here on the expert's plan, as if it had started now
     np.testing.assert_allclose(action[after:after + 20], action0[plain[0] + 1:plain[0] + 21], atol=1e-4)
-    probe = subprocess.run([sys.executable, str(REPO / "demos" / "probe_decisions.py"), str(tmp_path / "pick9"),
-                            str(tmp_path / "pick0")], capture_output=True, text=True, timeout=120)
-    assert probe.returncode == 0, probe.stderr[-2000:]
-    assert probe.stdout.splitlines() == [
-        f"{tmp_path / 'pick9'}: {1 + delay} decision frames: {1 + delay} start a pick, 0 a pass, 0 neither",
-        f"{tmp_path / 'pick0'}: 1 decision frames: 1 start a pick, 0 a pass, 0 neither"]
 
 
-def test_late_pick_is_off_by_default_and_validated(capsys):
-    from colorsort.data.late_pick import LatePick
+def test_a_late_pick_holds_only_an_expert_that_starts_approaching(capsys):
+    """The late-pick hook holds the step in which ``Expert.approaching`` turns on, and no other: an expert with
+    no approach phase (the tracking one) is never held. On the command line, a tracking belt is refused."""
+    class Fixed:  # an expert whose approach turns on in its third step
+        def __init__(self, approach_at: int | None):
+            self.approach_at, self.steps, self.approaching = approach_at, 0, False
 
-    class Fixed:  # an expert that is not the stopping-belt one: never held back
         def act(self, obs):
-            return np.array([0.1, -1.0, -1.0])
+            self.steps += 1
+            self.approaching = self.approach_at is not None and self.steps >= self.approach_at
+            return np.array([float(self.steps), 1.0, -1.0], np.float32)
 
-    off = LatePick(0)
-    off.reset(0)
-    for _ in range(3):
-        stored, executed = off.act(Fixed(), {})
-        assert stored is executed
-    assert CollectConfig().late_pick == 0 and "late_pick" not in CollectConfig().settings()
-    assert CollectConfig(late_pick=5).settings()["late_pick"] == 5
-    with pytest.raises(ValueError, match="late_pick"):
-        CollectConfig(late_pick=101)
-    with pytest.raises(ValueError, match="late_pick"):
-        LatePick(-1)
-    with pytest.raises(ValueError, match="tracking belt"):
-        CollectConfig(preset="tracking", late_pick=5)
+    def run(expert, steps=8):
+        hook = LatePick(9).episode(0, expert)
+        out = [perturbed([hook], lambda: Step(*[expert.act({})] * 2)) for _ in range(steps)]
+        return [float(s.stored[0]) for s in out], [float(s.executed[0]) for s in out]
+
+    from colorsort.data.perturbations import late_pick
+
+    delay = int(np.random.default_rng([0, late_pick.STREAM]).integers(0, 10))
+    stored, executed = run(Fixed(3), steps=4 + delay)
+    assert stored[:2] == executed[:2] == [1.0, 2.0]  # before the approach: the expert's own
+    assert stored[2:3 + delay] == [3.0] * (1 + delay)  # the approach's first action, stored on every held frame
+    assert executed[2:2 + delay] == [2.0] * delay and executed[2 + delay] == 3.0  # the arm held, then it goes
+    assert stored[3 + delay] == executed[3 + delay] == 4.0  # the expert's clock stood still meanwhile
+    assert run(Fixed(None)) == ([float(k) for k in range(1, 9)],) * 2  # never approaching: never held
     assert exit_status(main, ["--variant", "tracking", "--late-pick", "5", "--episodes", "1"]) == 2
     assert "late_pick" in capsys.readouterr().err
 
 
-def test_late_pass_is_off_by_default_and_validated():
-    from colorsort.data.late_pass import LatePass
-
+def test_a_late_pass_holds_the_belt_pass_and_is_off_at_zero():
     action = np.array([0.1, -1.0, 1.0], np.float32)
-    off = LatePass(0)
-    off.reset(0)
-    assert all(off.executed(action) is action for _ in range(5))
-    with pytest.raises(ValueError, match="late_pass"):
-        CollectConfig(late_pass=-1)
-    with pytest.raises(ValueError, match="late_pass"):
-        LatePass(-1)
+    hook = LatePass(9).episode(2, expert=None)
+    from colorsort.data.perturbations import late_pass
+
+    delay = int(np.random.default_rng([2, late_pass.STREAM]).integers(0, 10))
+    steps = [perturbed([hook], lambda: Step(action, action)) for _ in range(delay + 1)]
+    assert all(s.stored is action for s in steps)
+    assert [float(s.executed[-1]) for s in steps] == [-1.0] * delay + [1.0]
+    assert not LatePass(0).active and CollectConfig(perturbations=(LatePass(0),)).perturbations == ()
 
 
 def test_brightness_records_a_lighting_demo_under_the_lights_asked_for(tmp_path):
@@ -351,7 +380,7 @@ def test_brightness_records_a_lighting_demo_under_the_lights_asked_for(tmp_path)
         out = tmp_path / name
         argv = ["--variant", "lighting", "--episodes", "1", "--boxes-per-episode", "1", "--seed", "3",
                 "--cameras", "sensor", "--image-size", "32", "--out", str(out)]
-        assert main(argv + (["--brightness", brightness] if brightness else [])) == 0
+        assert main(argv + ([f"--brightness={brightness}"] if brightness else [])) == 0
         settings = json.loads((out / "meta" / "colorsort.json").read_text())["settings"]
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -364,6 +393,6 @@ def test_brightness_records_a_lighting_demo_under_the_lights_asked_for(tmp_path)
     assert dim < 0.6 * bright  # a third of the light, rendered
     assert np.array_equal(dim_state, bright_state)  # the lights alone differ
     plain, _, _ = first_frame(None, "plain")
-    assert "brightness" not in plain  # datasets collected without it resume as before
+    assert "brightness" not in plain  # recorded only where given
     assert exit_status(main, ["--variant", "lighting", "--brightness", "dim", "--out", str(tmp_path / "bad")]) == 2
     assert not (tmp_path / "bad").exists()

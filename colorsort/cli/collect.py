@@ -29,11 +29,12 @@ import sys
 from tqdm import tqdm
 
 from colorsort.cell.cameras import CAMERAS, parse_cameras
-from colorsort.cli.args import parse_image_size, parse_range
+from colorsort.cli.args import parse_image_size
 from colorsort.cli.run import guarded
 from colorsort.config import PRESETS
 from colorsort.data.collect import CollectSummary, collect
 from colorsort.data.config import FPS_CHOICES, VCODECS, CollectConfig
+from colorsort.data.perturbations import PERTURBATIONS, parse
 from colorsort.errors import FAILED, INTERRUPTED
 from colorsort.executors.base import EXECUTORS
 from colorsort.logs import quiet_robosuite_info
@@ -71,16 +72,9 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--retries", type=int, default=d.retries,
                         help="times a shard is recorded again after its worker process died")
     parser.add_argument("--vcodec", default=d.vcodec, help=f"video codec, one of {VCODECS}")
-    parser.add_argument("--late-pass", type=int, default=d.late_pass,
-                        help="hold each belt-pass command back 0..N control steps, storing the expert's action: "
-                             "demos of the states a policy reaches when it lets a box through late (default 0: off)")
-    parser.add_argument("--late-pick", type=int, default=d.late_pick,
-                        help="hold the arm back 0..N control steps each time the expert starts a pick, storing its "
-                             "first approach action: demos of a box waiting at the ray to be picked, as --late-pass's "
-                             "to be let through (stopping belt only; default 0: off)")
-    parser.add_argument("--brightness", default=None,
-                        help="LO,HI: a random-lights variant's lights drawn from this brightness range "
-                             "[x the cell's] instead of the variant's own, e.g. 0.5,0.9 for demos under dim lights")
+    for name, kind in PERTURBATIONS.items():  # the demonstrator's perturbations, one flag each
+        parser.add_argument(f"--{name.replace('_', '-')}", dest=name, metavar=kind.metavar, default=None,
+                            help=f"{kind.help} (colorsort.data.perturbations.{kind.__module__.rsplit('.', 1)[-1]})")
     parser.add_argument("--no-turn", action="store_true",
                         help="the expert keeps the cup at its home yaw over a turned box instead of turning to it")
     parser.add_argument("--resume", action="store_true", help="add the missing episodes to an existing dataset")
@@ -99,9 +93,9 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
         cameras=parse_cameras(args.cameras),
         image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
         executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
-        late_pass=args.late_pass, late_pick=args.late_pick, turn_to_box=not args.no_turn, resume=args.resume,
-        overwrite=args.overwrite,
-        brightness=parse_range(args.brightness) if args.brightness else None)
+        turn_to_box=not args.no_turn, resume=args.resume, overwrite=args.overwrite,
+        perturbations=tuple(parse(name, getattr(args, name)) for name in PERTURBATIONS
+                            if getattr(args, name) is not None))
 
 
 def print_summary(config: CollectConfig, s: CollectSummary) -> None:

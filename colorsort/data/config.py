@@ -6,24 +6,14 @@ from dataclasses import asdict, dataclass
 
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
+from colorsort.data.perturbations import Perturbation, canonical
 from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.robots import get_robot
-from colorsort.variants import VARIANTS, check_brightness, get_variant
+from colorsort.variants import get_variant
 
 FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
 VCODECS = ("h264", "libsvtav1", "hevc")
-MAX_LATE_PICK = 100  # [control steps] the longest hold asked for (late_pick.py; 5 s at 20 Hz)
-
-
-def check_late_pick(steps: int, tracking: bool) -> None:
-    """``ValueError`` unless ``steps`` [control steps] is 0 (off) to ``MAX_LATE_PICK``, and 0 on a tracking belt
-    (``tracking``), where a held pick's box would move on."""
-    if not 0 <= steps <= MAX_LATE_PICK:
-        raise ConfigError(f"late_pick={steps}: give 0 (off) to {MAX_LATE_PICK} control steps")
-    if steps and tracking:
-        raise ConfigError(f"late_pick={steps} holds a pick back on a stopped belt; on a tracking belt the box "
-                         "would move on: give late_pick=0")
 
 
 @dataclass(frozen=True)
@@ -47,13 +37,8 @@ class CollectConfig:
     retries: int = 2  # re-runs of a shard whose worker process died
     address: str | None = None  # ray only: the cluster to join ("auto"); None starts one on this machine
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
-    # [control steps] hold each belt pass back 0..late_pass steps; stored actions stay the expert's (late_pass.py)
-    late_pass: int = 0
-    # [control steps] hold the arm back 0..late_pick steps at each pick's start (stopping belt; late_pick.py)
-    late_pick: int = 0
-    # [x the cell's light] a random-lights variant's brightness drawn from this range instead of its own
-    # (variants.LIGHT_BRIGHTNESS): demos under dimmer lights than the variant's share; None: the variant's
-    brightness: tuple[float, float] | None = None
+    # the demonstrator's perturbations (data.perturbations: late_pass, late_pick, brightness); kept in name order
+    perturbations: tuple[Perturbation, ...] = ()
     turn_to_box: bool = True  # the expert turns the cup to a turned box; False: it keeps its home yaw (ExpertConfig)
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
@@ -78,16 +63,13 @@ class CollectConfig:
         check_range("boxes_per_episode", self.boxes_per_episode, 1, 100)
         self.executor_config  # noqa: B018 - validates executor, workers, retries and address
         check_range("shard_size", self.shard_size, 1, 100_000)
-        check_range("late_pass", self.late_pass, 0, 100)
-        check_late_pick(self.late_pick, self.task_config.tracking)
+        object.__setattr__(self, "perturbations", canonical(self.perturbations))
+        variant = get_variant(self.variant) if self.variant else None
+        for p in self.perturbations:
+            if not p.applies_to(variant, self.task_config.tracking):
+                raise ConfigError(p.refusal(variant))
         if not all(16 <= s <= 1024 and s % 2 == 0 for s in self.image_size):
             raise ConfigError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
-        if self.brightness is not None:
-            if self.variant is None or not get_variant(self.variant).random_lights:
-                lit = [n for n, v in VARIANTS.items() if v.random_lights]
-                raise ConfigError(f"brightness={self.brightness} sets a random-lights variant's range: give "
-                                 f"variant one of {lit} (got {self.variant!r})")
-            check_brightness("brightness", self.brightness)
         if self.seed < 0:
             raise ConfigError(f"seed={self.seed} must be >= 0")
         if self.resume and self.overwrite:
@@ -96,14 +78,11 @@ class CollectConfig:
     def settings(self) -> dict:
         """The settings every episode of one dataset must share (checked on --resume)."""
         keys = ("boxes_per_episode", "preset", "robot", "variant", "seed", "repo_id", "cameras", "image_size", "fps",
-                "vcodec", "late_pass")
+                "vcodec")
         settings = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
         if not self.turn_to_box:  # recorded only when off: datasets from before the option resume as they did
             settings["turn_to_box"] = False
-        if self.brightness is not None:  # likewise recorded only when set
-            settings["brightness"] = list(self.brightness)
-        if self.late_pick:  # likewise
-            settings["late_pick"] = self.late_pick
+        settings.update({p.name: p.settings() for p in self.perturbations})
         return settings
 
     @property

@@ -14,14 +14,16 @@ from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
+import numpy as np
+
 from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import judge
 from colorsort.config import sorting_time_limit
 from colorsort.data.config import CollectConfig
-from colorsort.data.late_pass import LatePass
-from colorsort.data.late_pick import LatePick
+from colorsort.data.perturbations import Step, perturbed
 from colorsort.data.schema import features, frame, task_text
 from colorsort.executors.base import held_interrupts
+from colorsort.expert.base import Expert
 from colorsort.expert.factory import expert_preset, make_expert
 from colorsort.variants import get_variant
 
@@ -67,6 +69,12 @@ def make_recording_env(config: CollectConfig) -> ColorSort:
                      camera_heights=h, camera_widths=w, control_freq=config.fps, ignore_done=True, seed=config.seed)
 
 
+def expert_step(expert: Expert, obs: dict) -> Step:
+    """The expert's action for ``obs``, stored and executed as it is (float32: the env consumes exactly that)."""
+    action = expert.act(obs).astype(np.float32)
+    return Step(action, action)
+
+
 class _Stopped(Exception):
     """Recording was asked to stop."""
 
@@ -89,8 +97,11 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     t0 = time.perf_counter()
     env = make_recording_env(config)
     expert = make_expert(env, replace(expert_preset(env.config.tracking), turn_to_box=config.turn_to_box))
-    late, pick = LatePass(config.late_pass), LatePick(config.late_pick)
-    lighting = partial(get_variant(config.variant).lighting, brightness=config.brightness) if config.variant else None
+    lighting = None
+    if config.variant:
+        variant = get_variant(config.variant)
+        lighting = next((draw for p in config.perturbations if (draw := p.lighting(variant))), variant.lighting)
+    around_expert = sorted(config.perturbations, key=lambda p: (p.order, p.name))  # innermost first
     out.sim_state = env.sim_state_layout.describe()
     dataset = LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
@@ -106,8 +117,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
             seed = config.seed + index
             obs = env.reset(seed=seed, lighting=lighting)  # as the benchmark's gym env: same seed, same episode
             expert.reset(obs)
-            late.reset(seed)
-            pick.reset(seed)
+            hooks = [p.episode(seed, expert) for p in around_expert]
             first = min(env.boxes_in_play(), key=lambda b: b.serial)
             task = task_text(first.color, k)
             frames = 0
@@ -116,9 +126,9 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                     raise _Stopped
                 t = time.perf_counter()
                 # stored as float32: the env consumes exactly that; the executed action is the stored one
-                # unless a pick's start or a belt-pass is held back
-                action, executed = pick.act(expert, obs)
-                executed = late.executed(executed)
+                # unless a perturbation holds something back
+                step = perturbed(hooks, partial(expert_step, expert, obs))
+                action, executed = step.stored, step.executed
                 t_act = time.perf_counter()
                 dataset.add_frame(frame(env, obs, action, config.cameras, task))
                 t_add = time.perf_counter()

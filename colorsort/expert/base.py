@@ -92,12 +92,14 @@ class Expert:
     and jerk, or where the config leaves the acceleration to the arm each joint's own: its maker's figure,
     else what its motor's torque gives it (``limits.torque_limited_accelerations``).
 
-    A subclass sets ``START`` (its first phase) and implements ``handlers``, ``wait_point`` and
-    ``drop_seed``. Use: ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)``,
-    then ``action = expert.act(obs)`` every step.
+    A subclass sets ``START`` (its first phase) and, where it picks a box that waits for it, ``APPROACH`` (the
+    phase that moves to it), and implements ``handlers``, ``wait_point`` and ``drop_seed``. Use:
+    ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)``, then ``action = expert.act(obs)``
+    every step.
     """
 
     START: Enum
+    APPROACH: Enum | None = None  # the phase in which the arm moves to a box that waits for it; None: no such phase
 
     def __init__(self, calibration: Calibration, sensor_image: Callable[[dict], np.ndarray],
                  config: ExpertConfig = ExpertConfig()):
@@ -156,6 +158,11 @@ class Expert:
     def seen_color(self) -> str | None:
         """Colour of the box being handled, as the camera saw it, or None."""
         return self.cycles[-1].seen_color if self.cycles and self.cycles[-1].done_at is None else None
+
+    @property
+    def approaching(self) -> bool:
+        """The arm is on its way to a waiting box (``APPROACH``): an ``act`` that turns this on starts a pick."""
+        return self.APPROACH is not None and self.phase is self.APPROACH
 
     def act(self, obs: dict) -> np.ndarray:
         """The action for this step: joint targets [rad], suction, belt pass."""

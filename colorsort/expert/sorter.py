@@ -63,6 +63,7 @@ class SortingExpert(Expert):
     """
 
     START = Phase.MOVE_TO_WAIT
+    APPROACH = Phase.APPROACH
 
     def handlers(self) -> dict[Enum, Handler]:
         return {

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 from colorsort.errors import ConfigError
@@ -57,47 +57,48 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     rows: list[dict] = []
     curve: list[dict] = []
     shipped: Path | None = None
-    for n in recipe.demos:
-        largest = n == recipe.demos[-1]
+    demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
+    for n in demos.counts:
+        largest = n == demos.counts[-1]
         data = stages.collect(recipe, n, out, settings.workers)
         if settings.until == "data":
             continue
         kept, frames = stages.size(data)
-        steps = recipe.updates(n, frames)
-        for seed in recipe.seeds:
+        steps = training.updates(largest, frames)
+        for seed in training.seeds:
             run_dir, timing = stages.train(recipe, data, steps, seed, out)
             if settings.until == "train":
                 continue
             model, chosen, validation = choose(recipe, settings, run_dir, timing, steps)
             at = "" if chosen == steps else f"-at{chosen}"
             scored = []
-            for variant in recipe.eval_variants if largest else (recipe.main_variant,):
-                name = f"{run_dir.name}{at}-{recipe.policy.execution}-{variant}"
-                report_path, log = out / "eval" / f"{name}.json", out / "logs" / f"eval-{name}.log"
-                episodes = recipe.episodes_on(variant)
-                report = stages.evaluate(recipe, model, variant, episodes, report_path, settings.envs, log)
+            for variant in evaluation.variants if largest else (evaluation.main_variant,):
+                stem = out / "eval" / f"{run_dir.name}{at}-{recipe.policy.execution}-{variant}"
+                report = stages.evaluate(recipe, model, variant, evaluation.episodes_on(variant), stem, settings.envs,
+                                         out / "logs")
                 scored.append({"demos_tried": n, "demos": kept, "frames": frames, "seed": seed, "steps": steps,
-                               "passes": round(steps * recipe.batch_size / frames, 1),
+                               "passes": round(steps * training.batch_size / frames, 1),
                                "train_minutes": timing["wall_s"] / 60, **report})
                 if validation:
                     scored[-1].update(checkpoint=chosen, validation=validation)
                 print(table(scored[-1:], recipe.label).splitlines()[-1], flush=True)
             rows += scored
-            if largest and seed == recipe.seeds[0]:
+            if largest and seed == training.seeds[0]:
                 shipped = model
-                if recipe.save_every:
+                if training.save_every:
                     curve = learning_curve(recipe, settings, run_dir, timing, scored, chosen)
     if settings.until != "eval":
         print(f"stopped after the {settings.until!r} stage: {out}")
         return {}
     assert shipped is not None
     plots = [out / "success_vs_demos.png"]
-    plot_demos([r for r in rows if r["variant"] == recipe.main_variant], recipe.label, recipe.main_variant, plots[0])
+    main = evaluation.main_variant
+    plot_demos([r for r in rows if r["variant"] == main], recipe.label, main, plots[0])
     if curve:
         plots.append(out / "learning_curve.png")
-        plot_curve(curve, recipe.label, recipe.main_variant, machine(recipe.device), plots[1])
+        plot_curve(curve, recipe.label, main, machine(training.device), plots[1])
     wall = time.perf_counter() - t0
-    results = {"recipe": asdict(recipe), "command": command, "started": started, "wall_s": round(wall, 1),
+    results = {"recipe": recipe.to_json(), "command": command, "started": started, "wall_s": round(wall, 1),
                "rows": rows, "curve": curve}
     (out / "results.json").write_text(json.dumps(results, indent=1))
     print(f"\n{summary_table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\n"
@@ -114,7 +115,7 @@ def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
     The last, with no validation, unless the recipe selects (``select_episodes``) among two checkpoints or more."""
     last = run_dir / "checkpoints" / "last" / "pretrained_model"
     found = stages.checkpoints(run_dir, timing)
-    if not recipe.select_episodes or len(found) < 2:
+    if not recipe.evaluation.select_episodes or len(found) < 2:
         return last, steps, []
     points = selection.validate(recipe, run_dir.name, found, settings.out, settings.envs)
     chosen = selection.best(points)["step"]
@@ -128,16 +129,15 @@ def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing:
     """Success on the main variant's first ``curve_episodes`` seeds at every checkpoint, with its training time.
 
     The ``chosen`` checkpoint's point is the first episodes of its full score."""
-    final = next(r for r in scored if r["variant"] == recipe.main_variant)
-    episodes = min(recipe.curve_episodes, final["episodes"])
+    main = recipe.evaluation.main_variant
+    final = next(r for r in scored if r["variant"] == main)
+    episodes = min(recipe.evaluation.curve_episodes, final["episodes"])
     points = []
     for step, minutes, model in stages.checkpoints(run_dir, timing):
         if step == chosen:
             report = final
         else:
-            name = f"{run_dir.name}-{recipe.policy.execution}-{step}"
-            report = stages.evaluate(recipe, model, recipe.main_variant, episodes,
-                                     settings.out / "curve" / f"{name}.json", settings.envs,
-                                     settings.out / "logs" / f"curve-{name}.log")
+            stem = settings.out / "curve" / f"{run_dir.name}-{recipe.policy.execution}-{step}"
+            report = stages.evaluate(recipe, model, main, episodes, stem, settings.envs, settings.out / "logs")
         points.append({"step": step, "minutes": round(minutes, 1), **first_episodes(report, episodes)})
     return points

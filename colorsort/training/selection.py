@@ -9,7 +9,7 @@ evaluation seeds and shipped, and the evaluation seeds decide nothing.
 
 Layout under the pipeline's working folder::
 
-    select/<run>-<exec>-<update>-<variant>.json   colorsort-eval's report of one checkpoint on validation seeds
+    select/<run>-<exec>-<update>-<variant>-<key>.json   colorsort-eval's report of one checkpoint on validation seeds
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ COUNTS = ("episodes", "successes", "correct", "misplaced", "dropped")
 def validate(recipe: Recipe, run: str, checkpoints: list[tuple[int, float, Path]], out: Path,
              envs: int) -> list[dict]:
     """Every checkpoint of the training run ``run`` (``stages.checkpoints``: update, minutes, pretrained_model) on
-    ``recipe.select_episodes`` validation episodes of each training variant.
+    ``recipe.evaluation.select_episodes`` validation episodes of each training variant.
 
     One point per checkpoint: ``{"step", "minutes", "episodes", "successes", "correct", "misplaced", "dropped",
     "success_by_variant": {variant: rate}}`` (counts summed over the variants;
@@ -36,10 +36,10 @@ def validate(recipe: Recipe, run: str, checkpoints: list[tuple[int, float, Path]
     for step, minutes, model in checkpoints:
         point: dict = {"step": step, "minutes": round(minutes, 1), **dict.fromkeys(COUNTS, 0),
                        "success_by_variant": {}}
-        for variant in recipe.train_variants:
-            name = f"{run}-{recipe.policy.execution}-{step}-{variant}"
-            report = stages.evaluate(recipe, model, variant, recipe.select_episodes, out / "select" / f"{name}.json",
-                                     envs, out / "logs" / f"select-{name}.log", first_seed=VALIDATION_SEEDS[0])
+        for variant in recipe.demos.train_variants:
+            stem = out / "select" / f"{run}-{recipe.policy.execution}-{step}-{variant}"
+            report = stages.evaluate(recipe, model, variant, recipe.evaluation.select_episodes, stem, envs,
+                                     out / "logs", first_seed=VALIDATION_SEEDS[0])
             for key in COUNTS:
                 point[key] += report[key]
             point["success_by_variant"][variant] = report["success_rate"]

@@ -40,18 +40,17 @@ def machine(device: str) -> str:
     return f"a {os.cpu_count()}-core machine, training on {'the CPU' if device == 'cpu' else device}"
 
 
-def lights(recipe: Recipe, variant: str) -> str:
-    """" under lights of brightness x0.45-0.75" where the recipe collects ``variant``'s demos so, else ""."""
-    brightness = recipe.brightness_on(variant)
-    return f" under lights of brightness x{brightness[0]:g}-{brightness[1]:g}" if brightness else ""
-
-
-def holds(recipe: Recipe) -> str:
-    """"; every belt pass held back 0-100 steps, every pick 0-10" for the recipe's late passes and picks, else ""."""
-    held = [f"every belt pass held back 0-{recipe.late_pass} steps"] if recipe.late_pass else []
-    if recipe.late_pick:
-        held.append(f"every pick 0-{recipe.late_pick}" if held else f"every pick held back 0-{recipe.late_pick} steps")
-    return "; " + ", ".join(held) if held else ""
+def demo_line(recipe: Recipe) -> str:
+    """How the largest set's demos were made: "8 on default, 8 on lighting under lights of brightness x0.45-0.75,
+    ...; 3 boxes each; every belt pass held back 0-100 steps". A perturbation on every training variant is named
+    once at the end, one on some of them after each of those."""
+    demos = recipe.demos
+    everywhere = [p for p in demos.perturbations if demos.applying(p) == demos.train_variants]
+    mix = ", ".join(f"{c} on {v}" + "".join(f" {p.describe()}" for p in demos.perturbations_on(v)
+                                            if p not in everywhere)
+                    for v, c in demos.split(demos.counts[-1]).items())
+    boxes = f"{demos.boxes_per_episode} boxes each" + "".join(f", {v}'s {n}" for v, n in demos.boxes_by_variant)
+    return "; ".join([mix, boxes, *(p.describe() for p in everywhere)])
 
 
 def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Path, command: str) -> None:
@@ -62,56 +61,55 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
     for p in plots:
         shutil.copy2(p, dest / p.name)
     (dest / "scores.json").write_text(json.dumps(results, indent=1))
-    every_seed = [r for r in results["rows"] if r["demos_tried"] == recipe.demos[-1]]
-    largest = [r for r in every_seed if r["seed"] == recipe.seeds[0]]
+    demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
+    every_seed = [r for r in results["rows"] if r["demos_tried"] == demos.counts[-1]]
+    largest = [r for r in every_seed if r["seed"] == training.seeds[0]]
     size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
-    mix = ", ".join(f"{c} on {v}{lights(recipe, v)}" for v, c in recipe.split(recipe.demos[-1]).items())
-    inputs = (f"`observation.state` and the cameras {', '.join(recipe.cameras)} at {recipe.image_size} px, never "
-              "`observation.environment_state`: the policy sees the boxes" if recipe.cameras else
+    inputs = (f"`observation.state` and the cameras {', '.join(demos.cameras)} at {demos.image_size} px, never "
+              "`observation.environment_state`: the policy sees the boxes" if demos.cameras else
               "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
-    boxes = f"{recipe.boxes_per_episode} boxes each" + "".join(
-        f", {variant}'s {n}" for variant, n in recipe.boxes_by_variant)
-    backbone = ", its ResNet-18 trained from scratch (no pretrained weights)" if recipe.cameras else ""
-    if recipe.image_shift:
-        backbone += f", every training image shifted at random by up to {recipe.image_shift:g} of its size"
-    if recipe.image_relight:
+    backbone = ", its ResNet-18 trained from scratch (no pretrained weights)" if demos.cameras else ""
+    if training.image_shift:
+        backbone += f", every training image shifted at random by up to {training.image_shift:g} of its size"
+    if training.image_relight:
         (b_lo, b_hi), (t_lo, t_hi) = LIGHT_BRIGHTNESS, RELIGHT_TEMPERATURE
         backbone += f", every training image relit at random (brightness x{b_lo:g}-{b_hi:g}, {t_lo:,}-{t_hi:,} K)"
     curve = ""
     if results.get("curve"):
-        curve = (f"\nLearning curve on `{recipe.main_variant}` (each checkpoint on the first {recipe.curve_episodes} "
+        curve = (f"\nLearning curve on `{evaluation.main_variant}` (each checkpoint on the first "
+                 f"{evaluation.curve_episodes} "
                  f"evaluation seeds; `learning_curve.png`):\n\n{curve_table(results['curve'])}\n")
     seeds = ""
-    if len(recipe.seeds) > 1:
-        seeds = (f"\nThe same data and updates with each of the recipe's {len(recipe.seeds)} training seeds "
-                 f"({', '.join(map(str, recipe.seeds))}; this policy is seed {recipe.seeds[0]}'s):\n\n"
+    if len(training.seeds) > 1:
+        seeds = (f"\nThe same data and updates with each of the recipe's {len(training.seeds)} training seeds "
+                 f"({', '.join(map(str, training.seeds))}; this policy is seed {training.seeds[0]}'s):\n\n"
                  f"{summary_table(every_seed, recipe.label)}\n")
     chosen = ""
     if any("validation" in r for r in every_seed):
         chosen = (f"\nThe checkpoint scored (and shipped) is the one of each run that did best on "
-                  f"{recipe.select_episodes} episodes of each training variant on validation seeds "
+                  f"{evaluation.select_episodes} episodes of each training variant on validation seeds "
                   f"({VALIDATION_SEEDS[0]} on, never scored; `colorsort.training.selection`):\n\n"
                   f"{validation_table(every_seed)}\n")
     at = f" (shipped: its checkpoint after {largest[0]['checkpoint']})" if "checkpoint" in largest[0] else ""
-    cameras = ",".join(recipe.cameras) or "none"
-    task = get_variant(recipe.main_variant).gym_id.removeprefix("colorsort/")
+    cameras = ",".join(demos.cameras) or "none"
+    task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
 
 {recipe.policy.describe(parameters(dest))}{backbone}, on {inputs}.
 {size_mb:.1f} MB.
 
 Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results['started']}, on
-{machine(recipe.device)}: {recipe.demos[-1]} expert demos tried ({mix}; {boxes}{holds(recipe)}),
-{largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {recipe.batch_size} in
+{machine(training.device)}: {demos.counts[-1]} expert demos tried ({demo_line(recipe)}),
+{largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {training.batch_size} in
 {largest[0]['train_minutes']:.0f} min of `lerobot-train`{at}. Stages reused from earlier runs of the same command
 count with the time they took then.
 
 Run it:
 
 ```
-colorsort-eval --policy {dest} --variant {recipe.main_variant} --episodes 50
+colorsort-eval --policy {dest} --variant {evaluation.main_variant} --episodes 50
 HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task={task} --env.cameras={cameras} \\
-    --env.image_size={recipe.image_size} --policy.path={dest} --policy.device=cpu \\
+    --env.image_size={demos.image_size} --policy.path={dest} --policy.device=cpu \\
     --eval.n_episodes=50 --eval.batch_size=2
 ```
 

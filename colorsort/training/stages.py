@@ -1,22 +1,17 @@
 """The pipeline's stages, each a documented command run as a subprocess, each reused when already finished.
 
+Every cached stage is named ``<stem>-<key>``, the key derived from the settings that feed it (``cache``).
 Layout of the working folder ``out``::
 
-    data/<variant>-<n>/       colorsort-collect's dataset of n demos on one variant (-b<B>: B boxes a demo
-                              where the recipe's boxes_by_variant says so; -lit<LO>-<HI>: --brightness LO,HI;
-                              -late<L>: --late-pass L; -pick<P>: --late-pick P;
-                              -noturn: --no-turn)
-    data/demos-<N>/           the training set: the parts merged (cameras: box state removed; -lit<LO>-<HI>,
-                              -late<L>, -noturn as its parts)
-    train/demos-<N>-<S>steps[-cos][-shift<F>]-seed<K>/  lerobot-train's run of S updates with seed K
-                              (-cos: cosine learning rate; -shift<F>: images shifted up to F); <run>.json its timing;
-                              under a constant rate, the first S updates of a longer run if there is one
-    eval/<run>-<exec>-<variant>.json  colorsort-eval's report of the run's last checkpoint, executing its
-                              chunks as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
-    eval/<run>-at<U>-<exec>-<variant>.json  the same of the checkpoint after U updates, when the validation
-                              seeds chose it over the last (``selection``)
-    curve/<run>-<exec>-<step>.json    colorsort-eval's report of an earlier checkpoint (the learning curve)
-    select/<run>-<exec>-<step>-<variant>.json  a checkpoint on validation seeds (``selection``)
+    data/<variant>-<n>-<key>/  colorsort-collect's dataset of n demos on one variant; stage.json its settings
+    data/demos-<N>-<key>/     the training set: the parts merged (cameras: box state removed)
+    train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its
+                              timing and settings; under a constant rate, the first S updates of a longer run
+    eval/<run>[-at<U>]-<exec>-<variant>-<key>.json  colorsort-eval's report of the run's last checkpoint (or
+                              the one after U updates, when the validation seeds chose it), executing its chunks
+                              as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
+    curve/<run>-<exec>-<step>-<key>.json    an earlier checkpoint's report (the learning curve)
+    select/<run>-<exec>-<step>-<variant>-<key>.json  a checkpoint on validation seeds (``selection``)
     logs/                     each command's output
 """
 
@@ -33,6 +28,7 @@ import time
 from pathlib import Path
 
 from colorsort.errors import DataConflictError, StageError
+from colorsort.training import cache
 from colorsort.training.recipes import Recipe
 
 REPO_ID = "local/colorsort-baseline"
@@ -59,41 +55,51 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     Demo i of training variant k has seed ``k * SEED_STRIDE + i``, so a smaller set's parts are the
     first episodes of a larger one's. With cameras the merged set loses ``observation.environment_state``:
     a camera policy must see the boxes, not read them from the simulator."""
-    root = out / "data" / f"demos-{n}{recipe.lights_suffix}{recipe.data_suffix}"
-    split = recipe.split(n)
-    parts = [out / "data" / part_name(recipe, variant, count) for variant, count in split.items()]
+    demos = recipe.demos
+    split = demos.split(n)
+    commands = {variant: collect_command(recipe, variant, k, count, workers)
+                for k, (variant, count) in enumerate(split.items())}
+    parts = {variant: out / "data" / cache.name(f"{variant}-{split[variant]}", part_settings(cmd))
+             for variant, cmd in commands.items()}
+    merged = {"parts": [p.name for p in parts.values()], "drop_box_state": bool(demos.cameras)}
+    root = out / "data" / cache.name(f"demos-{n}", merged)
     marker = root / "meta" / "complete"
     if (root / "meta" / "info.json").is_file() and marker.is_file():
         merged_from = marker.read_text().split()
-        if merged_from and merged_from != [p.name for p in parts]:  # an empty marker predates the record
-            raise DataConflictError(f"{root} was merged from {merged_from}, not {[p.name for p in parts]} "
-                             f"(another --train-variants mix): give another --out, or --fresh to rebuild it")
+        if merged_from != merged["parts"]:  # the same key from other parts: a stage left by other code
+            raise DataConflictError(f"{root} was merged from {merged_from}, not {merged['parts']}: give another "
+                                    "--out, or --fresh to rebuild it")
         print(f"reusing {root}")
         return root
-    for k, ((variant, count), part) in enumerate(zip(split.items(), parts, strict=True)):
-        boxes, brightness = recipe.boxes(variant), recipe.brightness_on(variant)
+    for variant, part in parts.items():
         if not (part / "meta" / "colorsort.json").is_file():
             shutil.rmtree(part, ignore_errors=True)
-            run([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
-                 "--boxes-per-episode", str(boxes), "--seed", str(SEED_STRIDE * k),
-                 "--cameras", ",".join(recipe.cameras) or "none", "--image-size", str(recipe.image_size),
-                 "--late-pass", str(recipe.late_pass), "--late-pick", str(recipe.late_pick),
-                 "--workers", str(workers), "--out", str(part),
-                 "--repo-id", REPO_ID] + ([] if recipe.turn_to_box else ["--no-turn"])
-                + (["--brightness", f"{brightness[0]:g},{brightness[1]:g}"] if brightness else []),
-                out / "logs" / f"collect-{part.name}.log")
+            run([*commands[variant], "--out", str(part)], out / "logs" / f"collect-{part.name}.log")
+            cache.remember(part, part_settings(commands[variant]))
         else:
             print(f"reusing {part}")
-    merge(parts, root, drop_box_state=bool(recipe.cameras))
+    merge(list(parts.values()), root, drop_box_state=bool(demos.cameras))
+    cache.remember(root, merged)
     return root
 
 
-def part_name(recipe: Recipe, variant: str, count: int) -> str:
-    """The folder of ``count`` demos of one training variant: ``jitter-8-late100``, ``seed-4-b1-late100``,
-    ``lighting-8-lit0.5-0.9-late100`` (its lights' brightness drawn from 0.5-0.9)."""
-    boxes = recipe.boxes(variant)
-    lit = recipe.lights_suffix if recipe.brightness_on(variant) else ""
-    return f"{variant}-{count}{'' if boxes == recipe.boxes_per_episode else f'-b{boxes}'}{lit}{recipe.data_suffix}"
+def collect_command(recipe: Recipe, variant: str, k: int, count: int, workers: int) -> list[str]:
+    """``colorsort-collect`` of ``count`` demos of training variant ``variant`` (the k-th), without ``--out``."""
+    demos = recipe.demos
+    return ([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
+             "--boxes-per-episode", str(demos.boxes(variant)), "--seed", str(SEED_STRIDE * k),
+             "--cameras", ",".join(demos.cameras) or "none", "--image-size", str(demos.image_size),
+             "--workers", str(workers), "--repo-id", REPO_ID]
+            + [f"--{p.name.replace('_', '-')}={p.text}" for p in demos.perturbations_on(variant)]
+            + ([] if demos.turn_to_box else ["--no-turn"]))
+
+
+def part_settings(command: list[str]) -> dict:
+    """What a part's demos depend on: its ``colorsort-collect`` arguments (workers aside: the same seeds give the
+    same data whatever their number)."""
+    args = command[1:]
+    dropped = {i for i, a in enumerate(args) if a == "--workers"}
+    return {"colorsort-collect": [a for i, a in enumerate(args) if i not in dropped and i - 1 not in dropped]}
 
 
 def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
@@ -121,17 +127,27 @@ def size(data: Path) -> tuple[int, int]:
 
 def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Path) -> list[str]:
     """``lerobot-train`` of the recipe's policy on ``data`` for ``steps`` updates with ``seed`` into ``run_dir``."""
-    save_every = recipe.save_every if 0 < recipe.save_every < steps else steps
+    training = recipe.training
+    save_every = training.save_every if 0 < training.save_every < steps else steps
     return [str(BIN / "lerobot-train"), f"--dataset.repo_id={REPO_ID}", f"--dataset.root={data}",
-            f"--policy.type={recipe.policy.type}", f"--policy.device={recipe.device}", "--policy.push_to_hub=false",
-            *recipe.policy.args(recipe.image_size), *recipe.augment_args(), f"--batch_size={recipe.batch_size}",
-            f"--steps={steps}", f"--save_freq={save_every}", "--log_freq=200", "--num_workers=1", f"--seed={seed}",
-            "--wandb.enable=false", f"--output_dir={run_dir}"]
+            f"--policy.type={recipe.policy.type}", f"--policy.device={training.device}", "--policy.push_to_hub=false",
+            *recipe.policy.args(recipe.demos.image_size), *training.augment_args(),
+            f"--batch_size={training.batch_size}", f"--steps={steps}", f"--save_freq={save_every}", "--log_freq=200",
+            "--num_workers=1", f"--seed={seed}", "--wandb.enable=false", f"--output_dir={run_dir}"]
+
+
+def train_settings(recipe: Recipe) -> dict:
+    """What a training run's weights depend on beside its data, length and seed: ``lerobot-train``'s arguments
+    (the inference settings aside: they change how a policy acts, not what it learns; ``set_inference``)."""
+    inference = tuple(f"--policy.{k}=" for k in recipe.policy.inference())
+    args = train_command(recipe, Path("DATA"), 1, 0, Path("RUN"))[1:]
+    skip = ("--dataset.root=", "--steps=", "--save_freq=", "--seed=", "--output_dir=", *inference)
+    return {"lerobot-train": [a for a in args if not a.startswith(skip)]}
 
 
 def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
     """``lerobot-train``; the run folder and its timing ``{"started": unix time, "wall_s": s}`` (reused if there)."""
-    run_dir = out / "train" / f"{data.name}-{steps}steps{recipe.run_suffix}-seed{seed}"
+    run_dir = out / "train" / f"{data.name}-{steps}steps-{cache.key(train_settings(recipe))}-seed{seed}"
     timing_path = run_dir.with_name(run_dir.name + ".json")  # not with_suffix: "-shift0.1-seed1000" has a dot
     if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
         print(f"reusing {run_dir}")
@@ -149,7 +165,7 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
         return run_dir, timing
     started = time.time()
     seconds = run(train_command(recipe, data, steps, seed, run_dir), out / "logs" / f"train-{run_dir.name}.log")
-    timing = {"started": started, "wall_s": round(seconds, 1)}
+    timing = {"started": started, "wall_s": round(seconds, 1), "settings": train_settings(recipe)}
     timing_path.write_text(json.dumps(timing))
     return run_dir, timing
 
@@ -221,18 +237,19 @@ def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
     return found
 
 
-def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, path: Path, envs: int, log: Path,
+def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, stem: Path, envs: int, log_dir: Path,
              first_seed: int | None = None) -> dict:
-    """``colorsort-eval`` of ``model`` on ``variant``'s first ``episodes`` evaluation seeds (reused if there);
-    with ``first_seed``, on the seeds from it instead (validation seeds)."""
+    """``colorsort-eval`` of ``model`` on ``variant``'s first ``episodes`` evaluation seeds into
+    ``<stem>-<key>.json`` (reused if there); with ``first_seed``, on the seeds from it instead (validation seeds)."""
+    settings = [variant, "--episodes", str(episodes)]
+    if first_seed is not None:
+        settings += ["--seed", str(first_seed)]
+    if recipe.evaluation.episode_length:
+        settings += ["--episode-length", str(recipe.evaluation.episode_length)]
+    path = stem.with_name(cache.name(stem.name, {"colorsort-eval --variant": settings}) + ".json")
     if path.is_file():
         print(f"reusing {path}")
         return json.loads(path.read_text())
-    cmd = [str(BIN / "colorsort-eval"), "--policy", str(model), "--variant", variant, "--episodes", str(episodes),
-           "--envs", str(envs), "--json", str(path)]
-    if first_seed is not None:
-        cmd += ["--seed", str(first_seed)]
-    if recipe.episode_length:
-        cmd += ["--episode-length", str(recipe.episode_length)]
-    run(cmd, log)
+    run([str(BIN / "colorsort-eval"), "--policy", str(model), "--variant", *settings, "--envs", str(envs),
+         "--json", str(path)], log_dir / f"{stem.parent.name}-{path.stem}.log")
     return json.loads(path.read_text())

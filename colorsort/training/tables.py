@@ -34,10 +34,10 @@ BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)
 def label(scores: dict) -> str:
     """The policy's label in a table ("ACT, sensor+wrist"), from the recipe stored with its scores.
 
-    Scores written before diffusion recipes existed store ACT's settings as ``act``."""
+    The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
     recipe = scores["recipe"]
     name = {"act": "ACT", "diffusion": "diffusion"}[recipe.get("policy", {"type": "act"})["type"]]
-    cameras = recipe["cameras"]
+    cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
 
