@@ -52,39 +52,31 @@ test: lint
 test-fast: lint
 	$(PYTEST) -m "not slow" tests
 
+# the benchmarks of the cell, the expert, recording, scaling and evaluation; each writes what it prints to
+# docs/results/<script>_<arguments>.md, which the docs pages link (records of one-off studies: docs/studies/)
 bench: $(STAMP)
-	@# each writes what it prints to docs/results/<script>_<arguments>.md, which the docs pages link
-	$(VENV)/bin/python demos/bench_env.py
-	$(VENV)/bin/python demos/bench_perception.py --views 1000
-	$(VENV)/bin/python demos/bench_seal.py
-	$(VENV)/bin/python demos/bench_sort.py --preset default --seeds 10 --boxes 20 --workers 2
-	$(VENV)/bin/python demos/bench_sort.py --preset seed --seeds 3 --boxes 4
-	$(VENV)/bin/python demos/bench_sort.py --robot Panda --seeds 2 --boxes 10
-	$(VENV)/bin/python demos/bench_sort.py --robot UR5e --seeds 2 --boxes 10
-	$(VENV)/bin/python demos/bench_tracking.py --seeds 10 --boxes 20 --workers 2
-	$(VENV)/bin/python demos/bench_bound.py
-	$(VENV)/bin/python demos/bench_bound.py --acceleration 15 --jerk 150
-	$(VENV)/bin/python demos/bench_bound.py --jerk 5000
-	$(VENV)/bin/python demos/bench_bound.py --descend 0.15 --lift 0.12
-	$(VENV)/bin/python demos/bench_bound.py --descend 0.3 --lift 0.25
-	$(VENV)/bin/python demos/bench_bound.py --drop-slots 4
-	$(VENV)/bin/python demos/bench_bound.py --drop-slots 4 --wait-at-wait-pose
-	$(VENV)/bin/python demos/soak.py --preset tracking-fast --boxes 2000
-	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot Panda --seeds 2 --boxes 10
-	$(VENV)/bin/python demos/bench_tracking.py --presets default,tracking --robot UR5e --seeds 2 --boxes 10
-	$(VENV)/bin/python demos/bench_collect.py --episodes 48
-	$(VENV)/bin/python demos/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
-	$(VENV)/bin/python demos/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
-	$(VENV)/bin/python demos/bench_suite.py --episodes 10
-	$(VENV)/bin/python demos/probe_features.py --policy baselines/act-camera --random-init
-	$(VENV)/bin/python demos/probe_features.py --policy baselines/act-camera --camera wrist --random-init
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking --executions chunk10,ens0.01,ens0.2 --episodes 20
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-tracking --variant tracking-jitter --executions chunk10,ens-0.1,ens0.01,ens0.05,ens0.2,ens0.5 --episodes 20
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-state --variant fast --episodes 10
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter --executions chunk20,chunk10,chunk5 --episodes 20
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter,seed,default,fast,lighting,distractors --executions chunk10,ens0.01 --episodes 20
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera --variant jitter --executions ens-0.1,ens0.1 --episodes 20
-	$(VENV)/bin/python demos/bench_execution.py --policy baselines/act-camera-snapshot --variant jitter --executions chunk10,ens0.2 --episodes 10 --validation
+	$(VENV)/bin/python benchmarks/bench_env.py
+	$(VENV)/bin/python benchmarks/bench_perception.py --views 1000
+	$(VENV)/bin/python benchmarks/bench_seal.py
+	$(VENV)/bin/python benchmarks/bench_sort.py --preset default --seeds 10 --boxes 20 --workers 2
+	$(VENV)/bin/python benchmarks/bench_sort.py --preset seed --seeds 3 --boxes 4
+	$(VENV)/bin/python benchmarks/bench_sort.py --robot Panda --seeds 2 --boxes 10
+	$(VENV)/bin/python benchmarks/bench_sort.py --robot UR5e --seeds 2 --boxes 10
+	$(VENV)/bin/python benchmarks/bench_tracking.py --seeds 10 --boxes 20 --workers 2
+	$(VENV)/bin/python benchmarks/bench_bound.py
+	$(VENV)/bin/python benchmarks/bench_bound.py --acceleration 15 --jerk 150
+	$(VENV)/bin/python benchmarks/bench_bound.py --jerk 5000
+	$(VENV)/bin/python benchmarks/bench_bound.py --descend 0.15 --lift 0.12
+	$(VENV)/bin/python benchmarks/bench_bound.py --descend 0.3 --lift 0.25
+	$(VENV)/bin/python benchmarks/bench_bound.py --drop-slots 4
+	$(VENV)/bin/python benchmarks/bench_bound.py --drop-slots 4 --wait-at-wait-pose
+	$(VENV)/bin/python benchmarks/soak.py --preset tracking-fast --boxes 2000
+	$(VENV)/bin/python benchmarks/bench_tracking.py --presets default,tracking --robot Panda --seeds 2 --boxes 10
+	$(VENV)/bin/python benchmarks/bench_tracking.py --presets default,tracking --robot UR5e --seeds 2 --boxes 10
+	$(VENV)/bin/python benchmarks/bench_collect.py --episodes 48
+	$(VENV)/bin/python benchmarks/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
+	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
+	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
 
 # a learned baseline: demos, lerobot-train, colorsort-eval, learning curve (`make baseline RECIPE=camera-tracking`;
 # `colorsort-baseline --list` names the recipes); about 1.5 h a recipe on 2 CPU cores

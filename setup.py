@@ -68,5 +68,6 @@ setup(
         "colorsort-eval=colorsort.cli.eval:main",
         "colorsort-slurm=colorsort.cli.slurm:main",
         "colorsort-baseline=colorsort.cli.baseline:main",
+        "colorsort-analyze=colorsort.cli.analyze:main",
     ]},
 )

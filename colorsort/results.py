@@ -1,6 +1,6 @@
 """Benchmark figures as files: what a script printed, with its command, the machine and the date.
 
-Every ``demos/bench_*.py`` runs its ``main`` inside ``recorded(__file__)``: the output is printed as
+Every ``benchmarks/*.py`` runs its ``main`` inside ``recorded(__file__)``: the output is printed as
 usual and also written to ``docs/results/<script>[_<arguments>].md``, which the docs pages link
 instead of retyping numbers. ``COLORSORT_RESULTS`` names another folder, or ``none`` for no file
 (the tests run scripts that way).
@@ -79,7 +79,7 @@ def recorded(script: str, argv: list[str] | None = None) -> Iterator[None]:
         sys.stdout = stdout
     if path is None:
         return
-    command = shlex.join(["python", f"demos/{Path(script).name}", *argv])
+    command = shlex.join(["python", f"benchmarks/{Path(script).name}", *argv])
     minutes = (dt.datetime.now(dt.UTC) - started).total_seconds() / 60
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(f"# `{command}`\n\nWritten by the command above on {started:%Y-%m-%d %H:%M} UTC "

@@ -37,13 +37,15 @@ def baseline(*args: str) -> list[str]:
 
 @pytest.mark.slow
 def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
-    """Two demo counts from two variants (merged with LeRobot's aggregate_datasets), each trained with two seeds for
-    2 steps with a checkpoint after each, one evaluation episode per variant, the learning curve of the first seed,
-    the table of mean and spread over seeds; then the same command again reuses every finished stage."""
+    """Two demo counts of one-box demos (each merged with LeRobot's aggregate_datasets), each trained for 2 steps
+    with a checkpoint after each, one evaluation episode per variant, the learning curve, the shipped policy; then
+    the same command again reuses every finished stage, a shorter run is taken from the longer one, bit for bit
+    what lerobot-train makes. (Several training seeds' tables: the pipeline's test with fake stages.)"""
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
-    argv = baseline("--recipe", "state", "--demos.counts=2,3", "--demos.train_mix=default:1,distractors:1",
-                    "--demos.late_pass=0", "--training.steps=2", "--training.small_steps=2",
-                    "--training.seeds=1000,1001", "--training.save_every=1", "--training.batch_size=2",
+    argv = baseline("--recipe", "state", "--demos.counts=1,2", "--demos.train_mix=default:1",
+                    "--demos.boxes_per_episode=1", "--demos.late_pass=0", "--training.steps=2",
+                    "--training.small_steps=2", "--training.seeds=1000", "--training.save_every=1",
+                    "--training.batch_size=2",
                     "--evaluation.variants=default,jitter", "--evaluation.episodes=1",
                     "--evaluation.other_episodes=1", "--evaluation.curve_episodes=1",
                     "--evaluation.episode_length=10", "--workers", "1", "--envs", "1", "--out", str(out))
@@ -52,22 +54,21 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
 
     results = json.loads((out / "results.json").read_text())
     assert [(r["demos"], r["variant"], r["seed"], r["steps"]) for r in results["rows"]] == [
-        (2, "default", 1000, 2), (2, "default", 1001, 2), (3, "default", 1000, 2), (3, "jitter", 1000, 2),
-        (3, "default", 1001, 2), (3, "jitter", 1001, 2)]
+        (1, "default", 1000, 2), (2, "default", 1000, 2), (2, "jitter", 1000, 2)]
     assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
     assert [p["step"] for p in results["curve"]] == [1, 2]
     assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
     curve = [p.name for p in (out / "curve").glob("*.json")]  # step 2's point is the full score's
-    assert len(curve) == 1 and re.fullmatch(r"demos-3-\w{8}-2steps-\w{8}-seed1000-chunk10-1-\w{8}\.json", curve[0])
-    assert "| default | ACT, state | 3 | 2 steps" in first.stdout
-    summary = first.stdout[first.stdout.index("success: mean (min-max over seeds)"):]
-    assert "| jitter | ACT, state | 3 | 2 steps" in summary and "0% (0-0%), 2 seeds | 0%, 0% | 1 |" in summary
+    assert len(curve) == 1 and re.fullmatch(r"demos-2-\w{8}-2steps-\w{8}-seed1000-chunk10-1-\w{8}\.json", curve[0])
+    assert "| default | ACT, state | 2 | 2 steps" in first.stdout
+    summary = first.stdout[first.stdout.rindex("| jitter |"):]
+    assert summary.startswith("| jitter | ACT, state | 2 | 2 steps")
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    (merged_root,) = (out / "data").glob("demos-3-*")
+    (merged_root,) = (out / "data").glob("demos-2-*")
     assert json.loads((merged_root / "stage.json").read_text())["drop_box_state"] is False
     merged = LeRobotDataset("local/colorsort-baseline", root=merged_root)
-    assert merged.num_episodes == 3 and merged.meta.video_keys == []
+    assert merged.num_episodes == 2 and merged.meta.video_keys == []
     for plot in ("success_vs_demos.png", "learning_curve.png"):
         image = cv2.imread(str(out / plot))
         assert image is not None and image.shape[0] > 200 and image.shape[1] > 300
@@ -77,23 +78,24 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     assert any(name.startswith("policy_preprocessor") for name in shipped)
     readme = (ship / "README.md").read_text()
     assert "colorsort-baseline --recipe state" in readme and "commit" in readme
-    assert "| jitter | ACT, state | 3 |" in readme
+    assert "| jitter | ACT, state | 2 |" in readme
     assert json.loads((ship / "scores.json").read_text())["rows"] == results["rows"]
     assert eval_main(["--policy", str(ship), "--variant", "default", "--episodes", "1", "--episode-length", "5"]) == 0
 
     again = run(argv, tmp_path, timeout=600)
     assert again.returncode == 0, again.stderr[-3000:]
-    assert again.stdout.count("reusing") == 2 + 4 + 6 + 1 and "lerobot-train" not in again.stdout
+    assert again.stdout.count("reusing") == 2 + 2 + 3 + 1 and "lerobot-train" not in again.stdout
     assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
 
     # 1 update: the first update of the 2-update runs, taken, not trained, and what lerobot-train makes of 1
     shorter = run([a.replace("steps=2", "steps=1") for a in argv] + ["--until", "train"], tmp_path, timeout=600)
     assert shorter.returncode == 0, shorter.stderr[-3000:]
-    assert shorter.stdout.count("taking the first 1 updates of") == 4 and "lerobot-train" not in shorter.stdout
+    assert shorter.stdout.count("taking the first 1 updates of") == 2 and "lerobot-train" not in shorter.stdout
     fresh = tmp_path / "fresh"
     shutil.copytree(out / "data", fresh / "data")
-    trained = run(baseline("--recipe", "state", "--demos.counts=3", "--demos.train_mix=default:1,distractors:1",
-                           "--demos.late_pass=0", "--training.steps=1", "--training.seeds=1000",
+    trained = run(baseline("--recipe", "state", "--demos.counts=2", "--demos.train_mix=default:1",
+                           "--demos.boxes_per_episode=1", "--demos.late_pass=0", "--training.steps=1",
+                           "--training.seeds=1000",
                            "--training.batch_size=2", "--workers", "1", "--out", str(fresh), "--until", "train"),
                   tmp_path, timeout=600)
     assert "lerobot-train" in trained.stdout, trained.stdout[-3000:] + trained.stderr[-3000:]
@@ -101,7 +103,7 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     from safetensors.torch import load_file
 
     (run_name,) = [p.name for p in (fresh / "train").iterdir() if p.is_dir()]
-    assert re.fullmatch(r"demos-3-\w{8}-1steps-\w{8}-seed1000", run_name)
+    assert re.fullmatch(r"demos-2-\w{8}-1steps-\w{8}-seed1000", run_name)
     taken, made = (load_file(root / "train" / run_name / "checkpoints" / "last" / "pretrained_model"
                              / "model.safetensors") for root in (out, fresh))
     assert taken.keys() == made.keys() and all(torch.equal(taken[k], made[k]) for k in taken)
@@ -113,8 +115,8 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     and colorsort-eval renders exactly the cameras it was trained on and refuses others."""
     out = tmp_path / "camera"
     result = run(baseline("--recipe", "camera", "--demos.image_size=32", "--demos.counts=1",
-                          "--demos.train_mix=default:1", "--training.steps=2", "--training.batch_size=2",
-                          "--evaluation.variants=default", "--evaluation.episodes=1", "--evaluation.curve_episodes=1",
+                          "--demos.train_mix=default:1", "--demos.boxes_per_episode=1", "--training.steps=2",
+                          "--training.batch_size=2", "--evaluation.variants=default", "--evaluation.episodes=1", "--evaluation.curve_episodes=1",
                           "--evaluation.episode_length=5", "--workers", "1", "--envs", "1", "--out", str(out)),
                  tmp_path, timeout=900)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
@@ -171,16 +173,15 @@ def test_the_tracking_recipe_runs_in_small_and_scores_the_checkpoint_its_validat
 
 @pytest.mark.slow
 def test_the_diffusion_camera_recipe_runs_in_small(tmp_path):
-    """camera-diffusion, tiny: lerobot-train's diffusion policy with its GroupNorm ResNet, spatial-softmax keypoints
-    and crops; it reads the images and the arm's state only, and colorsort-eval runs it on the cameras it knows."""
+    """camera-diffusion, tiny, to its training: lerobot-train's diffusion policy with its GroupNorm ResNet,
+    spatial-softmax keypoints and crops; it reads the images and the arm's state only, and colorsort-eval refuses
+    other cameras (``test_lerobot_cli`` evaluates a diffusion policy the documented command trained)."""
     out = tmp_path / "diffusion"
     result = run(baseline("--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=default:1",
-                          "--training.steps=2", "--training.batch_size=2", "--evaluation.variants=default",
-                          "--evaluation.episodes=1", "--evaluation.curve_episodes=1", "--evaluation.episode_length=10",
-                          "--workers", "1", "--envs", "1", "--out", str(out)), tmp_path, timeout=900)
+                          "--demos.boxes_per_episode=1", "--training.steps=2", "--training.batch_size=2",
+                          "--workers", "1", "--out", str(out), "--until", "train"), tmp_path, timeout=900)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
-    assert "--policy.type=diffusion" in result.stdout and "| default | diffusion, sensor+wrist | 1 | 2 steps" in \
-        result.stdout
+    assert "--policy.type=diffusion" in result.stdout
     (run_dir,) = (out / "train").glob("demos-1-*-2steps-*-seed1000")
     model = run_dir / "checkpoints" / "last" / "pretrained_model"
     config = json.loads((model / "config.json").read_text())
@@ -189,9 +190,6 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path):
     assert config["input_features"]["observation.images.sensor"]["shape"] == [3, 64, 64]
     assert (config["use_group_norm"], config["crop_shape"], config["pretrained_backbone_weights"]) == (
         True, [58, 58], None)
-    (report_path,) = (out / "eval").glob(f"{run_dir.name}-chunk8-default-*.json")
-    report = json.loads(report_path.read_text())
-    assert report["episodes"] == 1 and report["policy"] == str(model)
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "sensor"]) == 2
 
 
@@ -548,7 +546,7 @@ def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(SHIPPED))
 def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
-    """README's lerobot-eval command for a shipped policy, one episode."""
+    """README's lerobot-eval command for a shipped policy: it loads and acts, one episode of 100 steps."""
     if not SHIPPED[name].is_dir():
         pytest.skip(f"baselines/{name} is not shipped")
     from colorsort.benchmark.policies import checkpoint_cameras
@@ -558,7 +556,8 @@ def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
     result = run([str(BIN / "lerobot-eval"), "--env.type=colorsort", f"--env.task={task}",
                   f"--env.cameras={','.join(cameras) or 'none'}", f"--env.image_size={size[0] if size else 128}",
                   f"--policy.path={SHIPPED[name]}", "--policy.device=cpu", "--eval.n_episodes=1",
-                  "--eval.batch_size=1", f"--output_dir={tmp_path / 'eval'}"], tmp_path, timeout=600)
+                  "--eval.batch_size=1", "--env.episode_length=100", f"--output_dir={tmp_path / 'eval'}"],
+                 tmp_path, timeout=600)
     assert result.returncode == 0, result.stderr[-3000:]
     overall = json.loads((tmp_path / "eval" / "eval_info.json").read_text())["overall"]
     assert overall["n_episodes"] == 1 and 0 <= overall["pc_success"] <= 100
@@ -575,13 +574,13 @@ def test_documented_recipe_list_runs_verbatim():
 
 
 def test_docs_tables_are_the_ones_scores_json_gives():
-    """Every scores block in README and docs/ is what `python demos/baseline_tables.py` writes from its JSON;
+    """Every scores block in README and docs/ is what `python tools/baseline_tables.py` writes from its JSON;
     every shipped baseline with scores.json has its table in the docs."""
     from colorsort.training.tables import fill, pages
 
     text = {page: page.read_text() for page in pages(REPO)}
     for page, body in text.items():
-        assert fill(body, REPO) == body, f"{page} is stale: run python demos/baseline_tables.py"
+        assert fill(body, REPO) == body, f"{page} is stale: run python tools/baseline_tables.py"
     for name, path in SHIPPED.items():
         if (path / "scores.json").is_file():
             assert any(f"<!-- scores baselines/{name} table -->" in t for t in text.values()), name
@@ -674,93 +673,55 @@ def test_variant_all_runs_each_shipped_baseline_on_exactly_the_variants_it_fits(
 
 
 @pytest.mark.slow
-def test_bench_execution_scores_one_checkpoint_under_each_execution(tmp_path):
-    """demos/bench_execution.py's copy of a checkpoint executes as named: LeRobot loads it with that many open-loop
-    steps or with its temporal ensembler; the weights are the shipped ones; a bad name is refused."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("bench_execution", REPO / "demos" / "bench_execution.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+def test_an_execution_is_the_same_checkpoint_acting_as_named(tmp_path):
+    """``with_execution``'s copy of a checkpoint executes as named: LeRobot loads it with that many open-loop steps or
+    with its temporal ensembler; the weights are the shipped ones; a bad name is refused."""
+    from colorsort.benchmark.execution import inference_settings, with_execution
     from colorsort.benchmark.policies import LeRobotPolicy
 
-    chunked = LeRobotPolicy(bench.with_execution(SHIPPED["act-state"], "chunk5", tmp_path)).policy
-    ensembled = LeRobotPolicy(bench.with_execution(SHIPPED["act-state"], "ens0.01", tmp_path)).policy
+    chunked = LeRobotPolicy(with_execution(SHIPPED["act-state"], "chunk5", tmp_path)).policy
+    ensembled = LeRobotPolicy(with_execution(SHIPPED["act-state"], "ens0.01", tmp_path)).policy
     assert (chunked.config.n_action_steps, chunked.config.temporal_ensemble_coeff) == (5, None)
     assert ensembled.config.n_action_steps == 1 and ensembled.temporal_ensembler.chunk_size == 20
     assert (tmp_path / "chunk5" / "model.safetensors").read_bytes() == (
         SHIPPED["act-state"] / "model.safetensors").read_bytes()
     with pytest.raises(ValueError, match="chunkN"):
-        bench.inference_settings("open10")
+        inference_settings("open10")
 
 
-def test_bench_execution_compares_on_validation_seeds_when_asked(monkeypatch, capsys):
-    """``--validation`` plays the validation seeds (from 20000), never the evaluation seeds; without it, the
-    evaluation seeds (no first seed given)."""
-    import importlib.util
+def test_executions_are_compared_on_each_variant_named_and_on_validation_seeds_when_asked(monkeypatch):
+    """``execution_table``: one row per variant and execution, each scored on that variant; ``validation`` plays the
+    validation seeds (from 20000), never the evaluation seeds; an unknown variant or execution stops before any
+    episode runs."""
     from types import SimpleNamespace
 
+    from colorsort.benchmark import evaluate as evaluation
+    from colorsort.benchmark.execution import execution_table
     from colorsort.variants import VALIDATION_SEEDS
 
-    spec = importlib.util.spec_from_file_location("bench_execution", REPO / "demos" / "bench_execution.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    seeds = []
+    played = []
 
     def fake_evaluate(policy, variant, episodes, **kwargs):
-        seeds.append(kwargs["seed"])
+        played.append((Path(policy).name, variant, kwargs["seed"]))
         return SimpleNamespace(success_ci95=(0.0, 1.0), success_rate=1.0, correct=3, misplaced=0, dropped=0,
                                distractors_let_through=0, distractors=0)
 
-    monkeypatch.setattr(bench, "evaluate", fake_evaluate)
-    command = ["bench_execution.py", "--policy", str(SHIPPED["act-state"]), "--variant", "jitter", "--executions",
-               "chunk10,ens0.2", "--episodes", "2"]
-    for extra, first in (([], None), (["--validation"], VALIDATION_SEEDS[0])):
-        seeds.clear()
-        monkeypatch.setattr(sys, "argv", command + extra)
-        bench.main()
-        assert seeds == [first, first]
-    assert "first 2 validation seeds" in capsys.readouterr().out
-
-
-@pytest.mark.slow
-def test_bench_execution_scores_each_variant_named_and_refuses_an_unknown_one_first(tmp_path):
-    """``--variant default,distractors`` gives one row per variant and execution, each scored on that variant (only
-    the distractors episode holds boxes with no bin); a list with an unknown name stops with the valid names
-    before any episode runs."""
-    script = [sys.executable, str(REPO / "demos" / "bench_execution.py"), "--policy", str(SHIPPED["act-state"]),
-              "--executions", "chunk10", "--episodes", "1", "--envs", "1"]
-    bad = run(script + ["--variant", "default,nope"], tmp_path, timeout=120)
-    assert bad.returncode != 0 and "Valid variants" in bad.stderr and "| default |" not in bad.stdout
-    good = run(script + ["--variant", "default,distractors"], tmp_path, timeout=300)
-    assert good.returncode == 0, good.stderr[-3000:]
-    rows = [line.strip("| ").split(" | ") for line in good.stdout.splitlines()
-            if line.startswith("| default |") or line.startswith("| distractors |")]
-    assert [(r[0], r[1]) for r in rows] == [("default", "chunk10"), ("distractors", "chunk10")]
-    assert all(int(r[3]) + int(r[4]) + int(r[5]) >= 1 for r in rows)  # each moved a box of its own episode
-    default_distractors, distractors_distractors = (int(r[6].split("/")[1]) for r in rows)
-    assert default_distractors == 0 and distractors_distractors >= 1
-
-
-def test_the_shipped_state_policy_lets_a_distractor_through_where_the_expert_did(tmp_path):
-    """demos/probe_pass.py on an unseen distractors episode (seed 2: a purple box first, the expert's pass held
-    back 9 steps): it counts the episode's decision and passing frames, and act-state, trained with late passes,
-    predicts belt-pass on at every decision (the policy trained without them predicted it at none)."""
-    from colorsort.data.collect import collect
-    from colorsort.data.config import CollectConfig
-
-    out = tmp_path / "distractor"
-    collect(CollectConfig(variant="distractors", episodes=1, seed=2, cameras=(), late_pass=9, out=str(out)),
-            progress=False, log=lambda _: None)
-    probe = run([sys.executable, str(REPO / "demos" / "probe_pass.py"), "--policy", str(SHIPPED["act-state"]),
-                 "--dataset", str(out)], tmp_path, timeout=300)
-    assert probe.returncode == 0, probe.stderr[-3000:]
-    rows = {line.split(" | ")[0].strip("| "): line.split(" | ") for line in probe.stdout.splitlines()
-            if line.startswith("| decision") or line.startswith("| passing")}
-    decision = rows["decision: box at the ray, belt stopped"]
-    passing = rows["passing: belt running the box past the ray"]
-    assert int(decision[1]) >= 2 and int(passing[1]) >= 1
-    assert decision[4].strip(" |") == f"{decision[1]} of {decision[1]}"
+    monkeypatch.setattr(evaluation, "evaluate", fake_evaluate)
+    policy = str(SHIPPED["act-state"])
+    for validation, first in ((False, None), (True, VALIDATION_SEEDS[0])):
+        played.clear()
+        lines = list(execution_table(policy, ["default", "distractors"], ["chunk10", "ens0.2"], 2, 1, validation))
+        assert played == [(e, v, first) for v in ("default", "distractors") for e in ("chunk10", "ens0.2")]
+        assert [line.split(" | ")[:2] for line in lines[3:]] == [["| default", "chunk10"], ["| default", "ens0.2"],
+                                                                 ["| distractors", "chunk10"],
+                                                                 ["| distractors", "ens0.2"]]
+    assert "first 2 validation seeds" in lines[0]
+    played.clear()
+    for variants, executions, named in ((["default", "nope"], ["chunk10"], "Valid variants"),
+                                        (["default"], ["open10"], "chunkN")):
+        with pytest.raises(ValueError, match=named):
+            list(execution_table(policy, variants, executions, 1))
+    assert not played
 
 
 def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
@@ -794,8 +755,8 @@ def test_a_shipped_readme_says_how_the_demos_were_made():
 
 
 def test_first_box_delay_is_the_median_over_the_seeds_both_runs_placed_a_box(tmp_path):
-    """demos/first_box_delay.py: seed 1's first placed box 0.5 s later, seed 2's 1.0 s, seed 3 placed nothing in
-    one run (left out): median 0.75 s over 2 seeds; two runs with no seed in common are refused."""
+    """``colorsort-analyze first-box-delay``: seed 1's first placed box 0.5 s later, seed 2's 1.0 s, seed 3 placed
+    nothing in one run (left out): median 0.75 s over 2 seeds; two runs with no seed in common are refused."""
     def evaluation(times: dict[int, list[tuple[float, str]]]) -> dict:
         return {"variant": "default", "mean_cycle_time_s": 4.0, "per_episode": [
             {"seed": s, "boxes": [{"time": t, "outcome": o} for t, o in boxes]} for s, boxes in times.items()]}
@@ -805,14 +766,13 @@ def test_first_box_delay_is_the_median_over_the_seeds_both_runs_placed_a_box(tmp
     old = evaluation({1: [(7.0, "placed")], 2: [(8.0, "placed")], 3: [(8.0, "dropped")]})
     (tmp_path / "new.json").write_text(json.dumps(new))
     (tmp_path / "old.json").write_text(json.dumps(old))
-    out = run([sys.executable, str(REPO / "demos" / "first_box_delay.py"), "new.json", "old.json"], tmp_path,
-              timeout=60)
+    out = run([str(BIN / "colorsort-analyze"), "first-box-delay", "new.json", "old.json"], tmp_path, timeout=60)
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("first box placed +0.75 s later (median over 2 seeds, default)")
     (tmp_path / "other.json").write_text(json.dumps(evaluation({9: [(7.0, "placed")]})))
-    refused = run([sys.executable, str(REPO / "demos" / "first_box_delay.py"), "new.json", "other.json"], tmp_path,
+    refused = run([str(BIN / "colorsort-analyze"), "first-box-delay", "new.json", "other.json"], tmp_path,
                   timeout=60)
-    assert refused.returncode != 0 and "no evaluation seed where both runs placed a box" in refused.stderr
+    assert refused.returncode == 2 and "no evaluation seed where both runs placed a box" in refused.stderr
 
 
 def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):
@@ -837,7 +797,7 @@ def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_ch
 
 
 def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
-    """demos/compare_scores.py: each seed's rate, their mean, and box counts summed over the seeds; a variant only
+    """``colorsort-analyze compare``: each seed's rate, their mean, and box counts summed over the seeds; a variant only
     one run has gets a dash on the other side."""
     def row(variant: str, rate: float, correct: int, misplaced: int) -> dict:
         return {"demos_tried": 48, "variant": variant, "success_rate": rate, "correct": correct,
@@ -847,8 +807,7 @@ def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
     old = {"rows": [row("seed", 0.25, 10, 12)]}
     for name, scores in (("new.json", new), ("old.json", old)):
         (tmp_path / name).write_text(json.dumps(scores))
-    out = run([sys.executable, str(REPO / "demos" / "compare_scores.py"), "new.json", "old.json", "--labels", "a,b"],
-              tmp_path, 60)
+    out = run([str(BIN / "colorsort-analyze"), "compare", "new.json", "old.json", "--labels", "a,b"], tmp_path, 60)
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
     assert lines[0].startswith("| variant | a: mean (each seed) | b: mean (each seed) |")
@@ -858,51 +817,12 @@ def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
 
 
 def test_loading_a_checkpoint_prints_nothing_into_a_benchmarks_recorded_figures(capsys):
-    """LeRobot's "Loading weights from local directory" stays out of stdout, which demos/*.py record to docs/results."""
+    """LeRobot's "Loading weights from local directory" stays out of stdout, which benchmarks record to docs/results."""
     from colorsort.benchmark.policies import LeRobotPolicy
 
     capsys.readouterr()
     LeRobotPolicy(SHIPPED["act-state"])
     assert capsys.readouterr().out == ""
-
-
-def test_the_feature_probe_scores_what_features_hold_on_held_out_episodes():
-    """demos/probe_features.py's probe: features that hold the offset linearly give a held-out R^2 near 1, noise
-    gives none of the turn they do not hold, and the colour they hold is read every time."""
-    import importlib.util
-
-    import numpy as np
-
-    spec = importlib.util.spec_from_file_location("probe_features", REPO / "demos" / "probe_features.py")
-    probe_features = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(probe_features)
-    rng = np.random.default_rng(0)
-    episodes = np.repeat(np.arange(12), 15)
-    offset, turn, colour = rng.uniform(-5, 5, 180), rng.uniform(-np.pi, np.pi, 180), rng.integers(0, 3, 180)
-    held = np.column_stack([offset, np.eye(3)[colour]])  # what the features hold, spread over all of them
-    for width in (20, 400):  # more features than frames too (the frames-side solution)
-        features = held @ rng.normal(size=(4, width)) + 0.1 * rng.normal(size=(180, width))
-        features[:, 4] = 7.0  # constant: dropped, not divided by
-        scores = probe_features.probe(features, {"offset_cm": offset, "turn": turn, "colour": colour}, episodes)
-        assert scores["offset_cm"] > 0.95 and scores["turn"] < 0.2 and scores["colour"] == 1.0, (width, scores)
-
-
-@pytest.mark.slow
-def test_the_feature_probe_runs_on_a_shipped_camera_policy(tmp_path):
-    """The probe on act-camera's encoder over two recorded jitter episodes: a row for the pixels, the trained and
-    a random encoder, each with its feature count (32 px: 3,072 pixels, 512 ResNet features)."""
-    data = tmp_path / "jitter"
-    collected = run([str(BIN / "colorsort-collect"), "--variant", "jitter", "--episodes", "4", "--boxes-per-episode",
-                     "2", "--cameras", "sensor,wrist", "--image-size", "32", "--workers", "1", "--out", str(data),
-                     "--repo-id", "local/probe"], tmp_path, timeout=600)
-    assert collected.returncode == 0, collected.stderr[-3000:]
-    out = run([sys.executable, str(REPO / "demos" / "probe_features.py"), "--policy", str(SHIPPED["act-camera"]),
-               "--data", str(data), "--random-init"], tmp_path, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
-    rows = [line for line in out.stdout.splitlines() if line.startswith("| ") and "---" not in line]
-    assert [r.split(" | ")[:2] for r in rows[1:]] == [["| raw pixels", "3072"], ["| trained encoder", "512"],
-                                                        ["| random encoder", "512"]]
-    assert "4 episodes" in out.stdout and "40 frames" in out.stdout  # 5 frames of each of 8 boxes
 
 
 def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluation_seeds(tmp_path, monkeypatch):

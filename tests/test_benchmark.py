@@ -19,6 +19,7 @@ from colorsort.config import BIN_COLORS, COLORS, Lighting
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
+ANALYZE = str(Path(sys.executable).parent / "colorsort-analyze")
 REPO = Path(__file__).resolve().parent.parent
 
 
@@ -157,13 +158,13 @@ def test_eval_takes_a_checkpoints_cameras_unless_told_and_refuses_others(tmp_pat
 
 
 def test_outcomes_by_pose_counts_each_band(tmp_path):
-    """demos/outcomes_by_pose.py: each box in exactly one band of |yaw| and one of offset; wrong bins and drops
+    """``colorsort-analyze by-pose``: each box in exactly one band of |yaw| and one of offset; wrong bins and drops
     counted where they lie; the top edge (45 deg) belongs to the last band."""
     boxes = [{"outcome": "placed", "offset": -0.04, "yaw": 5.0}, {"outcome": "misplaced", "offset": 0.01, "yaw": -20.0},
              {"outcome": "misplaced", "offset": 0.03, "yaw": 45.0}, {"outcome": "dropped", "offset": 0.01, "yaw": 29.0},
              {"outcome": "let_through", "offset": 0.0, "yaw": 0.0}]
     (tmp_path / "eval.json").write_text(json.dumps({"per_episode": [{"boxes": boxes}]}))
-    out = subprocess.run([sys.executable, str(REPO / "demos" / "outcomes_by_pose.py"), "eval.json"], cwd=tmp_path,
+    out = subprocess.run([ANALYZE, "by-pose", "eval.json"], cwd=tmp_path,
                          capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     rows = out.stdout.splitlines()[3:]
@@ -174,7 +175,7 @@ def test_outcomes_by_pose_counts_each_band(tmp_path):
 
 
 def test_outcomes_by_lights_bands_episodes_by_the_lights_their_cameras_saw(tmp_path, closing):
-    """demos/outcomes_by_lights.py: `lighting` seeds 10008 and 10001 fall in the dimmest and brightest bands, and
+    """``colorsort-analyze by-lights``: `lighting` seeds 10008 and 10001 fall in the dimmest and brightest bands, and
     the sensor camera sees them so (its image at 10008 under half as bright as at 10001); a mix of variants is
     refused."""
     episodes = [{"seed": 10008, "success": False, "misplaced": 0, "dropped": 1},
@@ -183,21 +184,20 @@ def test_outcomes_by_lights_bands_episodes_by_the_lights_their_cameras_saw(tmp_p
     (tmp_path / "a.json").write_text(json.dumps({"variant": "lighting", "per_episode": episodes[:2]}))
     (tmp_path / "b.json").write_text(json.dumps({"variant": "lighting", "per_episode": episodes[2:]}))
     (tmp_path / "c.json").write_text(json.dumps({"variant": "default", "per_episode": episodes[:1]}))
-    script = str(REPO / "demos" / "outcomes_by_lights.py")
-    out = subprocess.run([sys.executable, script, "a.json", "b.json"], cwd=tmp_path, capture_output=True, text=True,
+    out = subprocess.run([ANALYZE, "by-lights", "a.json", "b.json"], cwd=tmp_path, capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines()[3:] == ["| brightness 0.5 to 0.65 | 1 | 0 (0%) | 0 | 1 |",
                                            "| brightness 0.65 to 0.8 | 0 | 0 (-) | 0 | 0 |",
                                            "| brightness 0.8 to 1 | 0 | 0 (-) | 0 | 0 |",
                                            "| brightness 1 to 1.6 | 2 | 1 (50%) | 1 | 0 |"]
-    mixed = subprocess.run([sys.executable, script, "a.json", "c.json"], cwd=tmp_path, capture_output=True,
+    mixed = subprocess.run([ANALYZE, "by-lights", "a.json", "c.json"], cwd=tmp_path, capture_output=True,
                            text=True, timeout=60)
-    assert mixed.returncode != 0 and "one variant" in mixed.stderr
+    assert mixed.returncode == 2 and "one variant" in mixed.stderr
     (tmp_path / "demos" / "meta").mkdir(parents=True)  # a collection from seed 10000 that kept episodes 1 and 8
     (tmp_path / "demos" / "meta" / "colorsort.json").write_text(json.dumps(
         {"settings": {"variant": "lighting", "seed": 10000}, "episodes": [1, 8]}))
-    demos = subprocess.run([sys.executable, script, "--demos", "demos"], cwd=tmp_path, capture_output=True,
+    demos = subprocess.run([ANALYZE, "by-lights", "--demos", "demos"], cwd=tmp_path, capture_output=True,
                            text=True, timeout=120)
     assert demos.returncode == 0, demos.stderr
     first, second = map(float, demos.stdout.split("brightness: ")[1].split(", "))
@@ -214,7 +214,7 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
              {"outcome": "misplaced", "offset": 0.01, "yaw": 10.0, "grip_offset": 0.012, "grip_yaw": 8.0},
              {"outcome": "dropped", "offset": 0.0, "yaw": 0.0, "grip_offset": None, "grip_yaw": None}]
     (tmp_path / "eval.json").write_text(json.dumps({"per_episode": [{"boxes": boxes}]}))
-    out = subprocess.run([sys.executable, str(REPO / "demos" / "outcomes_by_pose.py"), "eval.json"], cwd=tmp_path,
+    out = subprocess.run([ANALYZE, "by-pose", "eval.json"], cwd=tmp_path,
                          capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
@@ -229,70 +229,3 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
                           "| gripped turned 15 to 45 deg | 1 | 1 (100%) | 0 |"]
 
 
-def _probe_colour_source():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("probe_colour_source", REPO / "demos" / "probe_colour_source.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_the_colour_probe_repaints_the_box_in_the_snapshot_photo_only():
-    """demos/probe_colour_source.py: while painting, the snapshot photo shows the first box in another bin's colour,
-    the live sensor camera shows it as it is, and the expert (whose colour sensor reads the live camera) still puts
-    it in its own bin; afterwards every box has its own colour again."""
-    from colorsort.benchmark.policies import ExpertPolicy
-
-    probe = _probe_colour_source()
-    with pytest.raises(ValueError, match="one of"):
-        probe.parse_paint("red:red")
-    env = ColorSortGymEnv(get_variant("default"), cameras=("snapshot", "sensor"), image_size=(32, 32))
-    policy, pool = ExpertPolicy(), env.env.plant.pool
-    try:
-        obs, _ = env.reset(seed=0)
-        policy.reset(env, 0)
-        while not pool.in_play():
-            obs, *_ = env.step(policy.act(obs))
-        color = pool.in_play()[0].color
-        shown = BIN_COLORS[(BIN_COLORS.index(color) + 1) % 3]
-        with probe.painted_snapshots(env, color, shown):
-            while not obs["pixels"]["snapshot"].any():
-                obs, *_ = env.step(policy.act(obs))
-            photo, live = obs["pixels"]["snapshot"][8:].astype(int), obs["pixels"]["sensor"][8:].astype(int)
-            while not env.env.events:
-                obs, *_ = env.step(policy.act(obs))
-        restored = {b.color: tuple(pool.model.geom_rgba[pool.geom[b.index]]) for b in pool.in_play()}
-        event = env.env.events[0]
-    finally:
-        env.close()
-
-    def leading(img, a, b):  # pixels (below the red bin's rim) where colour a's channel leads colour b's
-        ca, cb = int(np.argmax(COLORS[a][:3])), int(np.argmax(COLORS[b][:3]))
-        return int(((img[..., ca] - img[..., cb]) > 60).sum())
-
-    assert leading(photo, shown, color) > 20 and leading(photo, color, shown) < 5, (color, shown)  # a few: the cell
-    assert leading(live, color, shown) > 20 and leading(live, shown, color) < 5, (color, shown)
-    assert (event.color, event.outcome.value, event.bin) == (color, "placed", color)
-    assert restored and all(rgba == pytest.approx(COLORS[c]) for c, rgba in restored.items())
-
-
-@pytest.mark.slow
-def test_the_colour_probe_prints_where_a_shipped_snapshot_policys_red_boxes_went(tmp_path):
-    """README's probe command, as written, on act-camera-snapshot (10 episodes; red boxes among them): a row for
-    the photo as it is, whose red boxes all went to the red bin, and one for the photo with them painted blue."""
-    out = subprocess.run([sys.executable, str(REPO / "demos" / "probe_colour_source.py"), "--policy",
-                          str(REPO / "baselines" / "act-camera-snapshot")],
-                         cwd=tmp_path, capture_output=True, text=True, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
-    rows = [line.split(" | ") for line in out.stdout.splitlines() if line.startswith("| ") and "---" not in line]
-    assert [r[0] for r in rows] == ["| snapshot photo", "| as it is", "| red boxes painted blue"]
-    assert rows[1][1] == "10/10" and int(rows[1][2]) > 0 and rows[1][3] == f"red {rows[1][2]} |"
-    refused = subprocess.run([sys.executable, str(REPO / "demos" / "probe_colour_source.py"), "--policy",
-                              str(REPO / "baselines" / "act-camera-snapshot"), "--paint", "red:pink"],
-                             cwd=tmp_path, capture_output=True, text=True, timeout=120)
-    assert refused.returncode == 2 and "one of" in refused.stderr
-    blind = subprocess.run([sys.executable, str(REPO / "demos" / "probe_colour_source.py"), "--policy",
-                            str(REPO / "baselines" / "act-state")], cwd=tmp_path, capture_output=True, text=True,
-                           timeout=120)
-    assert blind.returncode == 2 and "does not take the snapshot camera" in blind.stderr

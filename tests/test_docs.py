@@ -108,16 +108,16 @@ def test_a_benchmark_script_writes_what_it_printed_with_its_command_machine_and_
     from colorsort.results import recorded
 
     monkeypatch.setenv("COLORSORT_RESULTS", str(tmp_path))
-    with recorded("demos/bench_example.py", ["--seeds", "3"]):
+    with recorded("benchmarks/bench_example.py", ["--seeds", "3"]):
         print("measure   value\nsteps/s   1,234")
     (page,) = tmp_path.iterdir()
     assert page.name == "bench_example_seeds-3.md"
     text = page.read_text()
-    assert text.startswith("# `python demos/bench_example.py --seeds 3`\n")
+    assert text.startswith("# `python benchmarks/bench_example.py --seeds 3`\n")
     assert "cores" in text and " UTC " in text and "steps/s   1,234\n```" in text
     assert "steps/s   1,234" in capsys.readouterr().out  # printed as usual too
     monkeypatch.setenv("COLORSORT_RESULTS", "none")
-    with recorded("demos/bench_example.py", []):
+    with recorded("benchmarks/bench_example.py", []):
         print("nothing kept")
     assert len(list(tmp_path.iterdir())) == 1
 
@@ -137,7 +137,7 @@ def test_make_bench_rewrites_exactly_the_results_files_the_docs_link(monkeypatch
     makefile = (REPO / "Makefile").read_text()
     recipe = makefile[makefile.index("\nbench:"):].split("\n\n")[0]
     commands = [shlex.split(line.split("$(VENV)/bin/python", 1)[1]) for line in recipe.splitlines()
-                if "$(VENV)/bin/python demos/" in line]
+                if "$(VENV)/bin/python benchmarks/" in line]
     expected = {results_path(argv[0], argv[1:]).name for argv in commands}
     present = {p.name for p in (REPO / "docs" / "results").glob("*.md")}
     assert expected == present, f"make bench writes {sorted(expected - present)}; unknown: {sorted(present - expected)}"

@@ -75,11 +75,11 @@ def newest_eval_info(work: Path) -> dict:
 
 
 def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint):
-    """Two full episodes in LeRobot's default asynchronous vector env (the synchronous one, with the pre-0.6
-    --env.discover_packages_path, runs in the recorded evaluation's test)."""
+    """Two episodes of 60 steps in LeRobot's default asynchronous vector env, each filmed (the synchronous one,
+    with the pre-0.6 --env.discover_packages_path, runs in the recorded evaluation's test)."""
     batch_size = 2
     argv = replace_flag(documented_command("lerobot-eval"), "--eval.n_episodes", str(batch_size))
-    argv = replace_flag(argv, "--eval.batch_size", str(batch_size))
+    argv = replace_flag(argv, "--eval.batch_size", str(batch_size)) + ["--env.episode_length=60"]
     done = run(argv, readme_checkpoint, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     summary = newest_eval_info(readme_checkpoint)

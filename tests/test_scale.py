@@ -319,10 +319,10 @@ def test_a_shard_from_another_run_or_with_other_settings_is_refused(tmp_path):
 
 
 def test_evaluation_on_ray_gives_the_same_numbers_as_local(cluster):
-    kwargs = dict(episodes=3, image_size=(32, 32), cameras=("scene",), progress=False)
+    kwargs = dict(episodes=2, image_size=(32, 32), cameras=("scene",), progress=False)
     local = evaluate("expert", "default", **kwargs, envs=1)
     spread = evaluate("expert", "default", **kwargs, executor=ExecutorConfig("ray", 2), shard_size=1)
-    assert local.successes == 3 and local == spread
+    assert local.successes == 2 and local == spread
 
 
 def test_a_filmed_evaluation_on_ray_films_each_episode_where_it_runs(cluster, tmp_path):
@@ -382,7 +382,7 @@ def test_documented_ray_commands_work_as_written(argv, tmp_path):
         assert float(next(r for r in rows if r.startswith("default ")).split()[2].rstrip("%")) == 100.0
 
 
-@pytest.mark.parametrize("executor", ["local", "ray"])
+@pytest.mark.parametrize("executor", ["ray"])  # local processes: test_collect's interrupted runs
 def test_ctrl_c_keeps_every_finished_episode_and_resume_completes(executor, long_reference, tmp_path):
     out = tmp_path / "ds"
     command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "8",

@@ -91,16 +91,12 @@ def test_tracking_observation_state_ends_with_the_encoder(make_env):
 
 
 def test_the_cup_seals_and_lifts_a_box_moving_under_it_at_belt_speed():
-    """demos/bench_seal.py's trial: the cup held still, the box riding under it at 0.2 m/s (what the expert
-    meets if it did not match the belt at all) and at 0.5 m/s (the fastest belt)."""
-    import importlib.util
-    from pathlib import Path
+    """The seal trial (``benchmarks/bench_seal.py``'s): the cup held still, the box riding under it at 0.2 m/s (what
+    the expert meets if it did not match the belt at all) and at 0.5 m/s (the fastest belt)."""
+    from colorsort.expert.seal_trial import trial
 
-    spec = importlib.util.spec_from_file_location("bench_seal", Path(__file__).parents[1] / "demos" / "bench_seal.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
     for speed, max_offset_mm in ((0.2, 25.0), (0.5, 45.0)):
-        r = bench.trial(speed)
+        r = trial(speed)
         assert r["sealed"] and r["held"] and r["lifted"], r
         assert r["offset_mm"] < max_offset_mm and r["turn_deg"] < 2.0, r
 
@@ -138,7 +134,7 @@ def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
 
 def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env):
     """tracking-fast (0.3 m/s, a box every 2 s): 20 boxes, every one in the bin of its colour, none let go,
-    the belt never stopping, at 28 or more a minute (demos/bench_tracking.py runs 10 seeds of 20)."""
+    the belt never stopping, at 28 or more a minute (benchmarks/bench_tracking.py runs 10 seeds of 20)."""
     env = make_env(preset="tracking-fast", has_offscreen_renderer=True, ignore_done=True, seed=7)
     obs = env.reset()
     expert = make_expert(env)

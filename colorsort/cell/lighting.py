@@ -13,7 +13,7 @@ import numpy as np
 
 from colorsort.config import Lighting
 
-# The conditions the colour sensor is benchmarked under (demos/bench_perception.py).
+# The conditions the colour sensor is benchmarked under (benchmarks/bench_perception.py).
 CONDITIONS: dict[str, Lighting] = {
     "normal": Lighting(),
     "dim": Lighting(brightness=0.5),

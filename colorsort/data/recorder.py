@@ -2,7 +2,7 @@
 
 ``record_shard`` records a list of episode numbers into one new dataset and always finalizes it,
 so every episode it saved is loadable whatever stops it. Where its wall time goes is timed per
-stage (``ShardReport.seconds``) for ``demos/bench_collect.py``.
+stage (``ShardReport.seconds``) for ``benchmarks/bench_collect.py``.
 """
 
 from __future__ import annotations

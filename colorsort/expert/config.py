@@ -94,12 +94,12 @@ class ExpertConfig:
 STOPPING_EXPERT = ExpertConfig()
 # On the never-stopping belt every tenth of a second of the cycle counts (tracking-fast brings a box every
 # 2 s): the cup leaves the bin as soon as the seal is gone (the box falls free of a cup moving up and
-# away), it follows the box down and up faster (demos/bench_tracking.py measures the result), and the
+# away), it follows the box down and up faster (benchmarks/bench_tracking.py measures the result), and the
 # carry takes over halfway up, where the lift's acceleration passes through zero as ruckig's starts. It plans
 # at each joint's own acceleration (its maker's, else what its motor gives it: expert/limits.py) and leads its
 # targets by the planned acceleration too, so the arm keeps up with such plans. After a release with no box yet
 # within reach it waits over the bin, and it drops into each bin's two quickest slots (a bin holds at most three
-# boxes between emptyings, so two at most land on one spot; demos/soak.py places 2,000 of 2,000).
+# boxes between emptyings, so two at most land on one spot; benchmarks/soak.py places 2,000 of 2,000).
 TRACKING_EXPERT = ExpertConfig(motion=MotionConfig(acceleration=None, jerk=1500.0), release_time=0.0,
                                track_descend_time=0.10, track_lift_time=0.08, track_carry_at=0.5,
                                feed_forward_acceleration=True, wait_over_bin=True, drop_slots=2)

@@ -7,7 +7,7 @@ A Markdown page marks where a baseline's table goes::
     <!-- end scores -->
 
 ``fill`` rewrites everything between the two markers from ``baselines/act-camera/scores.json``;
-``python demos/baseline_tables.py`` does so for README.md and every page under ``docs/``, and a
+``python tools/baseline_tables.py`` does so for README.md and every page under ``docs/``, and a
 test fails when a page differs from what its JSON gives. Kinds:
 
 - ``table``: every scored row (with several training seeds: mean, range and each seed);
@@ -119,13 +119,13 @@ def fill(text: str, root: Path) -> str:
     """``text`` with every scores block rewritten from ``root/<dir>/scores.json``."""
     def block(m: re.Match) -> str:
         if m["kind"] == "headline":
-            note = f"Written by `python demos/baseline_tables.py` from `{m['dir']}/*/scores.json`:"
+            note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/*/scores.json`:"
             return f"{m[1]}{note}\n\n{headline(root / m['dir'])}\n\n{m[5]}"
         path = root / m["dir"] / "scores.json"
         if not path.is_file():
             raise ConfigError(f"a scores block names {m['dir']}, which has no scores.json")
         scores = json.loads(path.read_text())
-        note = f"Written by `python demos/baseline_tables.py` from `{m['dir']}/scores.json` ({scores['command']}):"
+        note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/scores.json` ({scores['command']}):"
         return f"{m[1]}{note}\n\n{render(scores, m['kind'])}\n\n{m[5]}"
 
     return BLOCK.sub(block, text)

@@ -1,6 +1,6 @@
 """Evaluation speed: episodes per minute of ``colorsort-eval`` with 1 and 2 environments at once, per policy.
 
-    python demos/bench_eval.py [--policies expert,baselines/act-state,baselines/act-camera] [--variant default]
+    python benchmarks/bench_eval.py [--policies expert,baselines/act-state,baselines/act-camera] [--variant default]
                                [--episodes 8] [--repeats 2]
 
 For each policy, runs ``colorsort.benchmark.evaluate.evaluate`` with ``envs=1`` and ``envs=2`` side by

@@ -1,6 +1,6 @@
 """Soak: the scripted expert sorting thousands of boxes in one episode, with the process's memory.
 
-    python demos/soak.py [--preset tracking-fast] [--boxes 2000] [--seed 0] [--every 200]
+    python benchmarks/soak.py [--preset tracking-fast] [--boxes 2000] [--seed 0] [--every 200]
 
 One env, one expert, never reset: boxes spawn, are sorted and bins emptied until ``--boxes`` have left
 play. Every ``--every`` boxes it prints the running counts (placed in the right bin, misplaced,

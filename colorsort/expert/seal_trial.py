@@ -1,32 +1,23 @@
-"""How fast may a box move under the cup and still be sealed and lifted? Measured, not assumed.
+"""A seal trial: how fast may a box move under the cup and still be sealed and lifted? Measured, not assumed.
 
-    python demos/bench_seal.py --speeds 0.02,0.05,0.1,0.2,0.3,0.5
-
-For each relative speed v [m/s] the belt (a tracking belt, which never stops) runs at v and the
-cup, held still over the belt, comes down onto a box as the tracking expert does (its heights,
-``track_heights``: down 4.3 cm in 0.2 s with suction on, 0.05 s on the box, up until the box's
-bottom is 5 cm over the belt in 0.15 s), the box timed to arrive under it as the pad lands.
-Printed per speed: whether the vacuum sealed, whether the box came up with the cup, the box's
-offset from the cup's axis once lifted [mm] and its tilt [deg].
-The tracking expert matches the belt's velocity, so the relative speed it seals at is its
-matching error (millimetres per second); this is the margin it has.
+For a relative speed v [m/s] the belt (a tracking belt, which never stops) runs at v and the cup, held still
+over the belt, comes down onto a box as the tracking expert does (its heights, ``track_heights``: down 4.3 cm
+in 0.2 s with suction on, 0.05 s on the box, up until the box's bottom is 5 cm over the belt in 0.15 s), the
+box timed to arrive under it as the pad lands. ``trial`` says whether the vacuum sealed, whether the box came
+up with the cup, the box's offset from the cup's axis once lifted [mm] and its tilt [deg]. The tracking expert
+matches the belt's velocity, so the relative speed it seals at is its matching error; ``benchmarks/bench_seal.py``
+prints the margin over a range of speeds.
 """
 
 from __future__ import annotations
 
-import argparse
-import os
-
 import numpy as np
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-
-from colorsort.cell.env import ColorSort  # noqa: E402
-from colorsort.expert.calibration import Calibration  # noqa: E402
-from colorsort.expert.config import ExpertConfig  # noqa: E402
-from colorsort.expert.planning import CupIK, Waypoint, site_yaw  # noqa: E402
-from colorsort.expert.tracking import DensePath, smoothstep, track_heights  # noqa: E402
-from colorsort.results import recorded
+from colorsort.cell.env import ColorSort
+from colorsort.expert.calibration import Calibration
+from colorsort.expert.config import ExpertConfig
+from colorsort.expert.planning import CupIK, Waypoint, site_yaw
+from colorsort.expert.tracking import DensePath, smoothstep, track_heights
 
 
 def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
@@ -45,11 +36,11 @@ def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
     for k in range(40):  # 2 s: to the pose over the belt, and settle
         s = smoothstep(min(1.0, k / 30))
         obs, _, _, _ = env.step(np.concatenate([cal.home + s * (q_over - cal.home), [-1.0, -1.0]]))
-    path, q = [q_over], q_over
+    joints, q = [q_over], q_over
     for z in heights[1:]:
         q = ik.solve(Waypoint("down and up", (x_cup, L.belt_y, z), yaw), q)
-        path.append(q)
-    path = DensePath(np.array(path), dt)
+        joints.append(q)
+    path = DensePath(np.array(joints), dt)
     box = env.put_box("red", x_cup + speed * cfg.track_descend_time, L.belt_y)  # under the cup as the pad lands
     obs = env.observe()
     sealed = False
@@ -68,21 +59,3 @@ def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
     env.close()
     return {"speed": speed, "sealed": bool(sealed), "held": held, "lifted": bool(lifted), "offset_mm": offset,
             "turn_deg": tilt}
-
-
-def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--speeds", default="0.02,0.05,0.1,0.2,0.3,0.5", help="relative speeds [m/s], comma-separated")
-    p.add_argument("--robot", default="IRB140")
-    args = p.parse_args()
-    print("| box speed under the cup [m/s] | sealed | lifted | offset from the cup axis [mm] | turned [deg] |")
-    print("| --- | --- | --- | --- | --- |")
-    for v in (float(s) for s in args.speeds.split(",")):
-        r = trial(v, args.robot)
-        print(f"| {v:.2f} | {'yes' if r['sealed'] else 'no'} | {'yes' if r['lifted'] else 'no'} "
-              f"| {r['offset_mm']:.0f} | {r['turn_deg']:.1f} |", flush=True)
-
-
-if __name__ == "__main__":
-    with recorded(__file__):
-        main()

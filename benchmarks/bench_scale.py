@@ -1,7 +1,7 @@
 """Scaling collection and evaluation: local processes against a local Ray cluster, the merge's cost,
 and the speed-up projected from them.
 
-    python demos/bench_scale.py [--episodes 8] [--repeats 2] [--eval-episodes 6]
+    python benchmarks/bench_scale.py [--episodes 8] [--repeats 2] [--eval-episodes 6]
 
 1. Recording: the same episodes (seeds 0..N-1, the expert, one box each, scene and wrist at
    128 px) with 1 and 2 workers, on local processes and on a Ray cluster that each run starts

@@ -1,6 +1,6 @@
 """Speed of the ColorSort env, measured side by side in one run on one compiled model.
 
-    python demos/bench_env.py [--robot IRB140] [--seconds 3]
+    python benchmarks/bench_env.py [--robot IRB140] [--seconds 3]
 
 Prints raw ``mujoco.mj_step`` steps/s, the env's physics steps/s through ``env.step`` (the
 controller, belt, seal and bookkeeping included), their ratio, and frames/s of each camera at

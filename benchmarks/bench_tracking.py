@@ -1,6 +1,6 @@
 """Benchmark conveyor tracking side by side with the stopping belt, in one run.
 
-    python demos/bench_tracking.py --seeds 10 --boxes 20 --workers 2
+    python benchmarks/bench_tracking.py --seeds 10 --boxes 20 --workers 2
 
 Runs ``colorsort-sort``'s loop (the scripted expert, IRB 140 at its datasheet joint speeds unless
 ``--robot``) on each preset for seeds 0..seeds-1 and prints one row per preset: boxes correct,

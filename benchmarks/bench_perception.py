@@ -1,6 +1,6 @@
 """Benchmark the colour sensor on randomised rendered views, per colour and condition.
 
-    python demos/bench_perception.py --views 1000 --size 128
+    python benchmarks/bench_perception.py --views 1000 --size 128
 
 Each condition renders ``--views`` views from the sensor camera, colours in turn (red, green and
 blue must be named; yellow and purple have no bin and must come out "unknown"), boxes at random

@@ -1,6 +1,6 @@
 """Speed of recording: the real-time factor of colorsort-collect with 1 and with 2 workers, side by side.
 
-    python demos/bench_collect.py [--episodes 24] [--cameras scene,wrist] [--image-size 128] [--fps 20]
+    python benchmarks/bench_collect.py [--episodes 24] [--cameras scene,wrist] [--image-size 128] [--fps 20]
 
 Records the same episodes (seeds 0..N-1, one box each, the expert) twice into temporary
 folders: once with one worker, once with two. Prints for each the simulated seconds recorded

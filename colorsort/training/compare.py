@@ -1,18 +1,11 @@
-"""Two runs of a baseline recipe side by side, per variant, from their ``scores.json``.
+"""Two runs of a baseline recipe side by side, per variant, from their ``scores.json`` (``colorsort-analyze compare``).
 
-    python demos/compare_scores.py NEW_scores.json OLD_scores.json [--labels shifted,"not shifted"]
-
-For each variant of the largest demo count: the mean success over the training seeds with each seed's,
-then the boxes put in the right bin, a wrong bin and dropped, summed over every seed's episodes; last, the
-mean over the variants. An older run's ``scores.json`` comes from git:
-``git show COMMIT:baselines/NAME/scores.json > old.json``.
+For each variant of the largest demo count: the mean success over the training seeds with each seed's, then the
+boxes put in the right bin, a wrong bin and dropped, summed over every seed's episodes; last, the mean over the
+variants. An older run's ``scores.json`` comes from git: ``git show COMMIT:baselines/NAME/scores.json > old.json``.
 """
 
 from __future__ import annotations
-
-import argparse
-import json
-from pathlib import Path
 
 from colorsort.training.tables import largest_by_variant
 
@@ -43,19 +36,3 @@ def compare(new: dict, old: dict, labels: tuple[str, str]) -> str:
     means = [f"{sum(mean_rate(g) for g in groups.values()) / len(groups):.0f}%" for groups in (a, b)]
     lines.append(f"| every variant (mean of the variants' means) | {means[0]} | {means[1]} | | |")
     return "\n".join(lines)
-
-
-def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("new", type=Path)
-    p.add_argument("old", type=Path)
-    p.add_argument("--labels", default="new,old", help="two comma-separated column labels")
-    args = p.parse_args()
-    labels = tuple(args.labels.split(","))
-    if len(labels) != 2:
-        raise SystemExit(f"--labels takes two comma-separated labels, got {args.labels!r}")
-    print(compare(json.loads(args.new.read_text()), json.loads(args.old.read_text()), labels))
-
-
-if __name__ == "__main__":
-    main()

@@ -1,6 +1,6 @@
 """Baselines: the scripted expert and a random policy on every benchmark variant.
 
-    python demos/bench_suite.py [--episodes 10] [--workers 2] [--image-size 64] [--variants tracking,tracking-fast]
+    python benchmarks/bench_suite.py [--episodes 10] [--workers 2] [--image-size 64] [--variants tracking,tracking-fast]
 
 Runs ``colorsort.benchmark.evaluate.evaluate`` for each (policy, variant) pair on the variant's fixed
 evaluation seeds, the pairs spread over worker processes, and prints one Markdown table row per

@@ -1,6 +1,6 @@
 """The tracking expert's cycle against the physical bound: the arm's joint speeds and the cell's geometry.
 
-    python demos/bench_bound.py [--preset tracking-fast] [--seeds 10] [--boxes 20] [--jerk 150] [--acceleration 15]
+    python benchmarks/bench_bound.py [--preset tracking-fast] [--seeds 10] [--boxes 20] [--jerk 150] [--acceleration 15]
         [--descend 0.1] [--lift 0.08] [--drop-slots 2] [--wait-at-wait-pose]
 
 Prints, per bin and leg, the shortest cycle (``colorsort.expert.bound``: the box met at the best point

@@ -1,6 +1,6 @@
 """A screenshot of a ``colorsort-eval --report`` page, taken by headless Chromium (for the docs).
 
-    python demos/report_screenshot.py outputs/report docs/img/report.png
+    python tools/report_screenshot.py outputs/report docs/img/report.png
 
 The first video is played for a moment and paused at ``--at`` seconds, so that the picture shows
 a frame of the episode rather than a blank player. Needs Debian's ``chromium`` (or ``--browser``)

@@ -1,7 +1,7 @@
 """Benchmark the scripted expert: sorting accuracy and throughput over seeds.
 
-    python demos/bench_sort.py --preset default --seeds 10 --boxes 20 --workers 2
-    python demos/bench_sort.py --preset seed --seeds 3 --boxes 5
+    python benchmarks/bench_sort.py --preset default --seeds 10 --boxes 20 --workers 2
+    python benchmarks/bench_sort.py --preset seed --seeds 3 --boxes 5
 
 Runs ``colorsort-sort``'s loop for each seed in 0..seeds-1 (IRB 140 at its datasheet joint
 speeds unless ``--robot``) and prints per seed: boxes correct, misplaced, dropped, rejected,

@@ -1,6 +1,6 @@
 """Rewrite the baseline tables in README.md and docs/ from each shipped baseline's scores.json.
 
-    python demos/baseline_tables.py [--check]
+    python tools/baseline_tables.py [--check]
 
 A page marks a table with ``<!-- scores baselines/<name> table|curve -->`` ... ``<!-- end scores -->``
 (``colorsort.training.tables``); everything between is replaced. ``--check`` changes nothing and
