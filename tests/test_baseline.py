@@ -116,7 +116,8 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     out = tmp_path / "camera"
     result = run(baseline("--recipe", "camera", "--demos.image_size=32", "--demos.counts=1",
                           "--demos.train_mix=default:1", "--demos.boxes_per_episode=1", "--training.steps=2",
-                          "--training.batch_size=2", "--evaluation.variants=default", "--evaluation.episodes=1", "--evaluation.curve_episodes=1",
+                          "--training.batch_size=2", "--evaluation.variants=default", "--evaluation.episodes=1",
+                          "--evaluation.curve_episodes=1",
                           "--evaluation.episode_length=5", "--workers", "1", "--envs", "1", "--out", str(out)),
                  tmp_path, timeout=900)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
