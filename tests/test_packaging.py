@@ -83,3 +83,23 @@ def test_find_python_names_a_312_interpreter_or_says_what_to_install(tmp_path):
                              env={"PATH": str(tmp_path), "PYTHON": ""})
     assert missing.returncode == 1 and missing.stdout == ""
     assert "Python 3.12 or newer" in missing.stderr and "uv python install 3.12" in missing.stderr
+
+
+def test_a_shipped_models_weights_change_only_with_its_scores():
+    """The repository's weight: every commit that changed a shipped policy's weights changed its scores.json too
+    (a re-ship with new scores), so no weight file is committed again for nothing. A ship from before baselines
+    had a scores.json (the first act-state) has none to change."""
+    repo = Path(__file__).resolve().parents[1]
+    if not (repo / ".git").exists() or shutil.which("git") is None:
+        pytest.skip("not a git checkout")
+    for model in sorted((repo / "baselines").glob("*/model.safetensors")):
+        rel = model.relative_to(repo)
+        commits = subprocess.run(["git", "log", "--format=%H", "--", str(rel)], cwd=repo, capture_output=True,
+                                 text=True, check=True).stdout.split()
+        scores = rel.with_name("scores.json")
+        for commit in commits:
+            if subprocess.run(["git", "cat-file", "-e", f"{commit}:{scores}"], cwd=repo).returncode != 0:
+                continue
+            changed = subprocess.run(["git", "show", "--name-only", "--format=", commit], cwd=repo,
+                                     capture_output=True, text=True, check=True).stdout.split()
+            assert str(scores) in changed, f"{commit[:7]} changed {rel} but not its scores"
