@@ -35,6 +35,19 @@ def baseline(*args: str) -> list[str]:
     return [str(BIN / "colorsort-baseline"), *args]
 
 
+def score_row(**fields) -> dict:
+    """A row of a scores.json as the pipeline writes it (``ScoreRow.to_json``), with ``fields`` set."""
+    row = {"demos_tried": 40, "demos": 40, "frames": 4000, "seed": 1000, "steps": 5000, "passes": 10.0,
+           "train_minutes": 20.0, "policy": "p", "variant": "default", "episodes": 50, "successes": 0,
+           "success_rate": 0.0, "success_ci95": [0.0, 0.1], "correct": 0, "misplaced": 0, "dropped": 0,
+           "per_episode": []}
+    return {**row, **fields}
+
+
+def scores(rows: list[dict], recipe: dict | None = None) -> dict:
+    return {"recipe": recipe or {"cameras": []}, "command": "cmd", "started": "then", "wall_s": 1.0, "rows": rows}
+
+
 @pytest.mark.slow
 def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     """Two demo counts of one-box demos (each merged with LeRobot's aggregate_datasets), each trained for 2 steps
@@ -460,10 +473,11 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
     assert json.loads(json.dumps(stored)) == stored
     assert stored["demos"]["perturbations"] == {"brightness": [0.45, 0.75], "late_pass": 100, "late_pick": 10}
     assert stored["policy"]["type"] == "act" and stored["training"]["steps"] == 4000
+    from colorsort.training.records import Results
     from colorsort.training.tables import label
 
-    assert label({"recipe": stored}) == "ACT, snapshot"
-    assert label({"recipe": {"cameras": ["sensor", "wrist"]}}) == "ACT, sensor+wrist"  # the shipped, flat
+    assert label(Results.from_json(scores([], stored))) == "ACT, snapshot"
+    assert label(Results.from_json(scores([], {"cameras": ["sensor", "wrist"]}))) == "ACT, sensor+wrist"  # flat
 
 
 def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_state():
@@ -613,19 +627,19 @@ def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_p
     from colorsort.training.tables import headline
 
     def row(variant: str, seed: int, rate: float) -> dict:
-        return {"demos_tried": 40, "demos": 40, "variant": variant, "seed": seed, "steps": 5000, "train_minutes": 20.0,
-                "success_rate": rate, "success_ci95": [rate - 0.1, rate + 0.05], "episodes": 50}
+        return score_row(variant=variant, seed=seed, success_rate=rate, success_ci95=[rate - 0.1, rate + 0.05])
 
     for name, rows in (("one", [row("default", 1000, 0.9)]),
                        ("three", [row(v, s, r) for s, r in ((1000, 0.9), (1001, 0.6), (1002, 0.75))
                                   for v in ("default", "fast")])):
         (tmp_path / name).mkdir()
-        (tmp_path / name / "scores.json").write_text(json.dumps({"rows": rows, "recipe": {"cameras": []}}))
+        (tmp_path / name / "scores.json").write_text(json.dumps(scores(rows)))
+    point = {"episodes": 10, "successes": 5, "correct": 15, "misplaced": 0, "dropped": 0}
     chosen = [{**row("default", s, 1.0), "checkpoint": c,
-               "validation": [{"step": 2500, "minutes": 10.0}, {"step": 5000, "minutes": 20.0}]}
+               "validation": [{"step": 2500, "minutes": 10.0, **point}, {"step": 5000, "minutes": 20.0, **point}]}
               for s, c in ((1000, 5000), (1001, 2500))]
     (tmp_path / "two").mkdir()
-    (tmp_path / "two" / "scores.json").write_text(json.dumps({"rows": chosen, "recipe": {"cameras": []}}))
+    (tmp_path / "two" / "scores.json").write_text(json.dumps(scores(chosen)))
     one, three, two = headline(tmp_path).splitlines()[2:]
     assert "`default` 90% (80-95%, 50)" in one and "20 min on the CPU |" in one
     assert "`default` mean 75%, seeds 60-90% (3 x 50); `fast` mean 75%" in three
@@ -725,21 +739,34 @@ def test_executions_are_compared_on_each_variant_named_and_on_validation_seeds_w
     assert not played
 
 
+@pytest.mark.parametrize("name", list(SHIPPED))
+def test_a_shipped_scores_json_reads_as_typed_records_and_writes_back_unchanged(name):
+    """Results as typed records: every shipped scores.json reads into ``Results`` and writes back the same JSON, so
+    the records change no figure of a shipped baseline."""
+    from colorsort.training.records import Results
+
+    stored = json.loads((SHIPPED[name] / "scores.json").read_text())
+    results = Results.from_json(stored)
+    assert results.to_json() == {**stored, "curve": stored.get("curve") or []}
+    assert all(r.report.episodes == len(r.report.per_episode) for r in results.rows)
+
+
 def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
     """Two seeds' misplaced boxes add up per (colour, bin); correct and dropped boxes and smaller demo counts do not."""
+    from colorsort.training.records import Results
     from colorsort.training.tables import render
 
     def row(seed: int, demos: int, boxes: list[tuple[str, str, str | None]]) -> dict:
         episode = {"boxes": [{"color": c, "outcome": o, "bin": b} for c, o, b in boxes]}
-        return {"demos_tried": demos, "variant": "jitter", "seed": seed, "per_episode": [episode]}
+        return score_row(demos_tried=demos, variant="jitter", seed=seed, per_episode=[episode])
 
     rows = [row(1000, 48, [("red", "misplaced", "green"), ("blue", "correct", "blue"), ("red", "dropped", None)]),
             row(1001, 48, [("red", "misplaced", "green"), ("blue", "misplaced", "green")]),
             row(1000, 8, [("green", "misplaced", "red")])]
-    table = render({"rows": rows}, "mistakes")
+    table = render(Results.from_json(scores(rows)), "mistakes")
     assert table.splitlines()[2] == "| jitter | 3 | red -> green 2, blue -> green 1 |"
     clean = [row(1000, 48, [("red", "correct", "red")])]
-    assert render({"rows": clean}, "mistakes").endswith("| every variant | 0 | |")
+    assert render(Results.from_json(scores(clean)), "mistakes").endswith("| every variant | 0 | |")
 
 
 def test_a_shipped_readme_says_how_the_demos_were_made():
@@ -801,13 +828,12 @@ def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
     """``colorsort-analyze compare``: each seed's rate, their mean, and box counts summed over the seeds; a variant only
     one run has gets a dash on the other side."""
     def row(variant: str, rate: float, correct: int, misplaced: int) -> dict:
-        return {"demos_tried": 48, "variant": variant, "success_rate": rate, "correct": correct,
-                "misplaced": misplaced, "dropped": 0}
+        return score_row(demos_tried=48, variant=variant, success_rate=rate, correct=correct, misplaced=misplaced)
 
-    new = {"rows": [row("seed", 1.0, 40, 0), row("seed", 0.5, 20, 10), row("jitter", 0.25, 9, 6)]}
-    old = {"rows": [row("seed", 0.25, 10, 12)]}
-    for name, scores in (("new.json", new), ("old.json", old)):
-        (tmp_path / name).write_text(json.dumps(scores))
+    new = scores([row("seed", 1.0, 40, 0), row("seed", 0.5, 20, 10), row("jitter", 0.25, 9, 6)])
+    old = scores([row("seed", 0.25, 10, 12)])
+    for name, run_scores in (("new.json", new), ("old.json", old)):
+        (tmp_path / name).write_text(json.dumps(run_scores))
     out = run([str(BIN / "colorsort-analyze"), "compare", "new.json", "old.json", "--labels", "a,b"], tmp_path, 60)
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
@@ -844,7 +870,7 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
         evaluated.append((Path(model).parent.name, variant, first_seed))
         successes = validation[seed, step] // 2 if first_seed is not None else step
         episodes_run = 2 if first_seed is not None else episodes
-        return {"variant": variant, "episodes": episodes_run, "successes": successes,
+        return {"policy": str(model), "variant": variant, "episodes": episodes_run, "successes": successes,
                 "success_rate": successes / episodes_run, "success_ci95": [0.0, 1.0], "correct": 3 * successes,
                 "misplaced": 0, "dropped": 0, "distractors": 0, "distractors_let_through": 0,
                 "boxes_per_minute": 1.0, "mean_cycle_time_s": 2.0,
@@ -875,10 +901,10 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
     scored = [(e[0], e[1]) for e in evaluated if e[2] is None]
     assert scored[:2] == [("000002", "tracking"), ("000002", "tracking-jitter")]  # seed 1000: update 2
     assert scored[-2:] == [("last", "tracking"), ("last", "tracking-jitter")]  # seed 1001's tie: the later (3)
-    assert [(r["seed"], r["checkpoint"], r["success_rate"]) for r in results["rows"]] == [
+    assert [(r.seed, r.checkpoint, r.report.success_rate) for r in results.rows] == [
         (1000, 2, 0.5), (1000, 2, 0.5), (1001, 3, 0.75), (1001, 3, 0.75)]
-    assert [p["successes"] for p in results["rows"][0]["validation"]] == [0, 4, 2]  # 2 variants, half each
-    assert [(p["step"], p["successes"]) for p in results["curve"]] == [(1, 1), (2, 2), (3, 3)]
+    assert [p.successes for p in results.rows[0].validation] == [0, 4, 2]  # 2 variants, half each
+    assert [(p.step, p.successes) for p in results.curve] == [(1, 1), (2, 2), (3, 3)]
     assert (ship_to / "model.safetensors").read_text() == "weights after 2"
     readme = (ship_to / "README.md").read_text()
     assert "scored at 2/3 after 2/3 min (chosen on validation seeds)" in readme and "| 1000 | 2 (chosen) |" in readme

@@ -20,7 +20,7 @@ from colorsort.cell.lighting import LightRig
 from colorsort.cell.referee import Referee
 from colorsort.cell.suction import VacuumSeal
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, Lighting, TaskConfig
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, PlanningError
 
 # The parts of MuJoCo's state that ColorSort changes while it runs.
 MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
@@ -130,7 +130,7 @@ class Plant:
             raise ConfigError(f"Unknown colour {color!r}. Valid colours: {sorted(COLORS)}")
         parked = self.pool.parked()
         if not parked:
-            raise RuntimeError(f"All {len(self.pool.boxes)} boxes of the pool are in play")
+            raise PlanningError(f"All {len(self.pool.boxes)} boxes of the pool are in play")
         self.spawner.put(parked[0], color, x, y, yaw)
         return parked[0]
 

@@ -72,11 +72,12 @@ def main(argv: list[str] | None = None) -> int:
               f"mean cycle {new['mean_cycle_time_s']:.2f} s against {old['mean_cycle_time_s']:.2f} s")
     else:
         from colorsort.training.compare import compare
+        from colorsort.training.records import Results
 
         labels = tuple(args.labels.split(","))
         if len(labels) != 2:
             raise ConfigError(f"--labels takes two comma-separated labels, got {args.labels!r}")
-        print(compare(read(args.new), read(args.old), (labels[0], labels[1])))
+        print(compare(Results.load(args.new), Results.load(args.old), (labels[0], labels[1])))
     return 0
 
 

@@ -7,26 +7,28 @@ variants. An older run's ``scores.json`` comes from git: ``git show COMMIT:basel
 
 from __future__ import annotations
 
+from colorsort.training.records import Results, ScoreRow
 from colorsort.training.tables import largest_by_variant
 
 
-def cells(rows: list[dict] | None) -> tuple[str, str]:
+def cells(rows: list[ScoreRow] | None) -> tuple[str, str]:
     """("67% (100%, 85%, 15%)", "87 / 0 / 20"): mean success (each seed), right / wrong bin / dropped."""
     if not rows:
         return "-", "-"
-    rates = ", ".join(f"{100 * r['success_rate']:.0f}%" for r in rows)
+    rates = ", ".join(f"{100 * r.report.success_rate:.0f}%" for r in rows)
     success = f"{mean_rate(rows):.0f}% ({rates})"
-    return success, " / ".join(str(sum(r[k] for r in rows)) for k in ("correct", "misplaced", "dropped"))
+    boxes = (sum(getattr(r.report, k) for r in rows) for k in ("correct", "misplaced", "dropped"))
+    return success, " / ".join(map(str, boxes))
 
 
-def mean_rate(rows: list[dict]) -> float:
+def mean_rate(rows: list[ScoreRow]) -> float:
     """[%] the mean success of a variant's seeds."""
-    return 100 * sum(r["success_rate"] for r in rows) / len(rows)
+    return 100 * sum(r.report.success_rate for r in rows) / len(rows)
 
 
-def compare(new: dict, old: dict, labels: tuple[str, str]) -> str:
+def compare(new: Results, old: Results, labels: tuple[str, str]) -> str:
     """The Markdown table of ``new`` beside ``old``, one line per variant of either."""
-    a, b = largest_by_variant(new["rows"]), largest_by_variant(old["rows"])
+    a, b = largest_by_variant(new.rows), largest_by_variant(old.rows)
     head = [f"{labels[0]}: mean (each seed)", f"{labels[1]}: mean (each seed)",
             f"{labels[0]}: right / wrong bin / dropped", f"{labels[1]}: right / wrong bin / dropped"]
     lines = ["| variant | " + " | ".join(head) + " |", "| --- |" + " --- |" * len(head)]

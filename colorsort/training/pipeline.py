@@ -19,6 +19,7 @@ from pathlib import Path
 from colorsort.errors import ConfigError
 from colorsort.training import selection, stages
 from colorsort.training.recipes import Recipe
+from colorsort.training.records import CurvePoint, Results, ScoreRow, ValidationPoint, report_from_json
 from colorsort.training.report import first_episodes, plot_curve, plot_demos, summary_table, table
 from colorsort.training.ship import machine, ship
 
@@ -49,13 +50,14 @@ class RunSettings:
                 raise ConfigError(f"{key}={getattr(self, key)}: give at least 1")
 
 
-def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: Path | None = None) -> dict:
-    """Every stage of ``recipe`` under ``settings.out``; the results (also written to ``out/results.json``)."""
+def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: Path | None = None) -> Results | None:
+    """Every stage of ``recipe`` under ``settings.out``; the results (also written to ``out/results.json``), or None
+    when ``settings.until`` stops before the evaluations."""
     out = settings.out
     out.mkdir(parents=True, exist_ok=True)
     started, t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), time.perf_counter()
-    rows: list[dict] = []
-    curve: list[dict] = []
+    rows: list[ScoreRow] = []
+    curve: list[CurvePoint] = []
     shipped: Path | None = None
     demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
     for n in demos.counts:
@@ -76,11 +78,9 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
                 stem = out / "eval" / f"{run_dir.name}{at}-{recipe.policy.execution}-{variant}"
                 report = stages.evaluate(recipe, model, variant, evaluation.episodes_on(variant), stem, settings.envs,
                                          out / "logs")
-                scored.append({"demos_tried": n, "demos": kept, "frames": frames, "seed": seed, "steps": steps,
-                               "passes": round(steps * training.batch_size / frames, 1),
-                               "train_minutes": timing["wall_s"] / 60, **report})
-                if validation:
-                    scored[-1].update(checkpoint=chosen, validation=validation)
+                scored.append(ScoreRow(n, kept, frames, seed, steps, round(steps * training.batch_size / frames, 1),
+                                       timing["wall_s"] / 60, report_from_json(report),
+                                       chosen if validation else None, tuple(validation)))
                 print(table(scored[-1:], recipe.label).splitlines()[-1], flush=True)
             rows += scored
             if largest and seed == training.seeds[0]:
@@ -89,18 +89,17 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
                     curve = learning_curve(recipe, settings, run_dir, timing, scored, chosen)
     if settings.until != "eval":
         print(f"stopped after the {settings.until!r} stage: {out}")
-        return {}
+        return None
     assert shipped is not None
     plots = [out / "success_vs_demos.png"]
     main = evaluation.main_variant
-    plot_demos([r for r in rows if r["variant"] == main], recipe.label, main, plots[0])
+    plot_demos([r for r in rows if r.variant == main], recipe.label, main, plots[0])
     if curve:
         plots.append(out / "learning_curve.png")
         plot_curve(curve, recipe.label, main, machine(training.device), plots[1])
     wall = time.perf_counter() - t0
-    results = {"recipe": recipe.to_json(), "command": command, "started": started, "wall_s": round(wall, 1),
-               "rows": rows, "curve": curve}
-    (out / "results.json").write_text(json.dumps(results, indent=1))
+    results = Results(recipe.to_json(), command, started, round(wall, 1), tuple(rows), tuple(curve))
+    (out / "results.json").write_text(json.dumps(results.to_json(), indent=1))
     print(f"\n{summary_table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\n"
           f"results: {out / 'results.json'}\nwall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
     if ship_to is not None:
@@ -109,7 +108,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
 
 
 def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
-           steps: int) -> tuple[Path, int, list[dict]]:
+           steps: int) -> tuple[Path, int, list[ValidationPoint]]:
     """The checkpoint to score: (its pretrained_model, its update, the validation points it was chosen on).
 
     The last, with no validation, unless the recipe selects (``select_episodes``) among two checkpoints or more."""
@@ -118,26 +117,27 @@ def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
     if not recipe.evaluation.select_episodes or len(found) < 2:
         return last, steps, []
     points = selection.validate(recipe, run_dir.name, found, settings.out, settings.envs)
-    chosen = selection.best(points)["step"]
+    chosen = selection.best(points).step
     print(f"{run_dir.name}: validation chose update {chosen} ("
-          + ", ".join(f"{p['step']}: {p['successes']}/{p['episodes']}" for p in points) + ")", flush=True)
+          + ", ".join(f"{p.step}: {p.successes}/{p.episodes}" for p in points) + ")", flush=True)
     return (last if chosen == steps else next(m for step, _, m in found if step == chosen)), chosen, points
 
 
 def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
-                   scored: list[dict], chosen: int) -> list[dict]:
+                   scored: list[ScoreRow], chosen: int) -> list[CurvePoint]:
     """Success on the main variant's first ``curve_episodes`` seeds at every checkpoint, with its training time.
 
     The ``chosen`` checkpoint's point is the first episodes of its full score."""
     main = recipe.evaluation.main_variant
-    final = next(r for r in scored if r["variant"] == main)
-    episodes = min(recipe.evaluation.curve_episodes, final["episodes"])
+    final = next(r.report for r in scored if r.variant == main)
+    episodes = min(recipe.evaluation.curve_episodes, final.episodes)
     points = []
     for step, minutes, model in stages.checkpoints(run_dir, timing):
         if step == chosen:
             report = final
         else:
             stem = settings.out / "curve" / f"{run_dir.name}-{recipe.policy.execution}-{step}"
-            report = stages.evaluate(recipe, model, main, episodes, stem, settings.envs, settings.out / "logs")
-        points.append({"step": step, "minutes": round(minutes, 1), **first_episodes(report, episodes)})
+            report = report_from_json(stages.evaluate(recipe, model, main, episodes, stem, settings.envs,
+                                                      settings.out / "logs"))
+        points.append(first_episodes(report, episodes, step, round(minutes, 1)))
     return points

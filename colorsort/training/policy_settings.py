@@ -184,13 +184,8 @@ class DiffusionSettings:
 PolicySettings = ActSettings | DiffusionSettings
 
 SMALL_ACT = ActSettings()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
-# On the moving belt every step's action is the average of every chunk's prediction for it (ACT's
-# temporal ensembling): executing 10 of each chunk open-loop, the sensor+wrist camera policy sealed on no
-# box (0 of 50 on tracking); ensembled, 33 of 50 episodes sorted every box. The weights exp(-0.2 * k) for
-# the k-th prediction of a step keep the arm on the plan it made first: the three-camera policy's seeds
-# scored tracking-jitter 55/65/30% at 0.01, 95/85/40% at 0.2 (0.5: 70%; 0.05: 65%; newest first, -0.1: 25%),
-# tracking 100/50/85% and 100/75/55%.
-# On the stopping belt it made the state policy stall on fast (benchmarks/bench_execution.py: 30% against 70%).
+# the belt that never stops: each step's action the average of every chunk's prediction for it, the k-th weighted
+# exp(-0.2 k) so that the plan made first counts most (why 0.2: docs/baselines.md, "How ACT acts")
 TRACKING_ACT = ActSettings(n_action_steps=1, temporal_ensemble_coeff=0.2)
 LARGE_ACT = ActSettings(dim_model=512, dim_feedforward=3200, n_heads=8, n_encoder_layers=4)  # LeRobot's own size
 SMALL_DIFFUSION = DiffusionSettings()  # 11.77 M parameters with two 64 px cameras: 47.1 MB

@@ -19,36 +19,34 @@ from pathlib import Path
 from colorsort.errors import ConfigError
 from colorsort.training import stages
 from colorsort.training.recipes import Recipe
+from colorsort.training.records import ValidationPoint
 from colorsort.variants import VALIDATION_SEEDS
 
 COUNTS = ("episodes", "successes", "correct", "misplaced", "dropped")
 
 
 def validate(recipe: Recipe, run: str, checkpoints: list[tuple[int, float, Path]], out: Path,
-             envs: int) -> list[dict]:
+             envs: int) -> list[ValidationPoint]:
     """Every checkpoint of the training run ``run`` (``stages.checkpoints``: update, minutes, pretrained_model) on
-    ``recipe.evaluation.select_episodes`` validation episodes of each training variant.
-
-    One point per checkpoint: ``{"step", "minutes", "episodes", "successes", "correct", "misplaced", "dropped",
-    "success_by_variant": {variant: rate}}`` (counts summed over the variants;
-    minutes of training when it was saved). Each evaluation is reused when its report is there."""
+    ``recipe.evaluation.select_episodes`` validation episodes of each training variant; one point per checkpoint,
+    counts summed over the variants. Each evaluation is reused when its report is there."""
     points = []
     for step, minutes, model in checkpoints:
-        point: dict = {"step": step, "minutes": round(minutes, 1), **dict.fromkeys(COUNTS, 0),
-                       "success_by_variant": {}}
+        counts = dict.fromkeys(COUNTS, 0)
+        by_variant = {}
         for variant in recipe.demos.train_variants:
             stem = out / "select" / f"{run}-{recipe.policy.execution}-{step}-{variant}"
             report = stages.evaluate(recipe, model, variant, recipe.evaluation.select_episodes, stem, envs,
                                      out / "logs", first_seed=VALIDATION_SEEDS[0])
             for key in COUNTS:
-                point[key] += report[key]
-            point["success_by_variant"][variant] = report["success_rate"]
-        points.append(point)
+                counts[key] += report[key]
+            by_variant[variant] = report["success_rate"]
+        points.append(ValidationPoint(step, round(minutes, 1), success_by_variant=by_variant, **counts))
     return points
 
 
-def best(points: list[dict]) -> dict:
+def best(points: list[ValidationPoint]) -> ValidationPoint:
     """The point with the most successful episodes; ties go to the most boxes sorted right, then the later update."""
     if not points:
         raise ConfigError("no checkpoints to choose from")
-    return max(points, key=lambda p: (p["successes"], p["correct"], p["step"]))
+    return max(points, key=lambda p: (p.successes, p.correct, p.step))

@@ -10,6 +10,7 @@ import subprocess
 from pathlib import Path
 
 from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
+from colorsort.training.records import Results
 from colorsort.training.report import curve_table, summary_table, table, validation_table
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
 
@@ -53,17 +54,17 @@ def demo_line(recipe: Recipe) -> str:
     return "; ".join([mix, boxes, *(p.describe() for p in everywhere)])
 
 
-def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Path, command: str) -> None:
+def ship(recipe: Recipe, model: Path, results: Results, plots: list[Path], dest: Path, command: str) -> None:
     """Copy ``model`` to ``dest`` with ``scores.json`` (``results``), the plots and a README of how it was made."""
     dest.mkdir(parents=True, exist_ok=True)
     for f in model.iterdir():
         shutil.copy2(f, dest / f.name)
     for p in plots:
         shutil.copy2(p, dest / p.name)
-    (dest / "scores.json").write_text(json.dumps(results, indent=1))
+    (dest / "scores.json").write_text(json.dumps(results.to_json(), indent=1))
     demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
-    every_seed = [r for r in results["rows"] if r["demos_tried"] == demos.counts[-1]]
-    largest = [r for r in every_seed if r["seed"] == training.seeds[0]]
+    every_seed = [r for r in results.rows if r.demos_tried == demos.counts[-1]]
+    largest = [r for r in every_seed if r.seed == training.seeds[0]]
     size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
     inputs = (f"`observation.state` and the cameras {', '.join(demos.cameras)} at {demos.image_size} px, never "
               "`observation.environment_state`: the policy sees the boxes" if demos.cameras else
@@ -75,22 +76,22 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
         (b_lo, b_hi), (t_lo, t_hi) = LIGHT_BRIGHTNESS, RELIGHT_TEMPERATURE
         backbone += f", every training image relit at random (brightness x{b_lo:g}-{b_hi:g}, {t_lo:,}-{t_hi:,} K)"
     curve = ""
-    if results.get("curve"):
+    if results.curve:
         curve = (f"\nLearning curve on `{evaluation.main_variant}` (each checkpoint on the first "
                  f"{evaluation.curve_episodes} "
-                 f"evaluation seeds; `learning_curve.png`):\n\n{curve_table(results['curve'])}\n")
+                 f"evaluation seeds; `learning_curve.png`):\n\n{curve_table(results.curve)}\n")
     seeds = ""
     if len(training.seeds) > 1:
         seeds = (f"\nThe same data and updates with each of the recipe's {len(training.seeds)} training seeds "
                  f"({', '.join(map(str, training.seeds))}; this policy is seed {training.seeds[0]}'s):\n\n"
                  f"{summary_table(every_seed, recipe.label)}\n")
     chosen = ""
-    if any("validation" in r for r in every_seed):
+    if any(r.validation for r in every_seed):
         chosen = (f"\nThe checkpoint scored (and shipped) is the one of each run that did best on "
                   f"{evaluation.select_episodes} episodes of each training variant on validation seeds "
                   f"({VALIDATION_SEEDS[0]} on, never scored; `colorsort.training.selection`):\n\n"
                   f"{validation_table(every_seed)}\n")
-    at = f" (shipped: its checkpoint after {largest[0]['checkpoint']})" if "checkpoint" in largest[0] else ""
+    at = f" (shipped: its checkpoint after {largest[0].checkpoint})" if largest[0].checkpoint is not None else ""
     cameras = ",".join(demos.cameras) or "none"
     task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
@@ -98,10 +99,10 @@ def ship(recipe: Recipe, model: Path, results: dict, plots: list[Path], dest: Pa
 {recipe.policy.describe(parameters(dest))}{backbone}, on {inputs}.
 {size_mb:.1f} MB.
 
-Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results['started']}, on
+Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results.started}, on
 {machine(training.device)}: {demos.counts[-1]} expert demos tried ({demo_line(recipe)}),
-{largest[0]['demos']} kept, {largest[0]['steps']} updates at batch {training.batch_size} in
-{largest[0]['train_minutes']:.0f} min of `lerobot-train`{at}. Stages reused from earlier runs of the same command
+{largest[0].demos} kept, {largest[0].steps} updates at batch {training.batch_size} in
+{largest[0].train_minutes:.0f} min of `lerobot-train`{at}. Stages reused from earlier runs of the same command
 count with the time they took then.
 
 Run it:

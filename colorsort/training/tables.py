@@ -19,56 +19,57 @@ test fails when a page differs from what its JSON gives. Kinds:
 
 from __future__ import annotations
 
-import json
 import re
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training.report import curve_table, scored_checkpoints, scored_minutes, span, summary_table
+from colorsort.training.records import Results, ScoreRow
+from colorsort.training.report import curve_table, scored_checkpoints, span, summary_table
 
 KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
 
 
-def label(scores: dict) -> str:
+def label(scores: Results) -> str:
     """The policy's label in a table ("ACT, sensor+wrist"), from the recipe stored with its scores.
 
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
-    recipe = scores["recipe"]
+    recipe = scores.recipe
     name = {"act": "ACT", "diffusion": "diffusion"}[recipe.get("policy", {"type": "act"})["type"]]
     cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
 
-def render(scores: dict, kind: str) -> str:
-    """The Markdown ``kind`` table of a baseline's ``scores.json`` contents."""
+def render(scores: Results, kind: str) -> str:
+    """The Markdown ``kind`` table of a baseline's ``scores.json``."""
     if kind == "table":
-        return summary_table(scores["rows"], label(scores))
+        return summary_table(scores.rows, label(scores))
     if kind == "curve":
-        if not scores.get("curve"):
+        if not scores.curve:
             raise ConfigError("this baseline's scores.json has no learning curve "
-                             "(it saved no checkpoints along the way)")
-        return curve_table(scores["curve"])
+                              "(it saved no checkpoints along the way)")
+        return curve_table(scores.curve)
     if kind == "mistakes":
-        return mistakes_table(scores["rows"])
+        return mistakes_table(scores.rows)
     raise ConfigError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
 
 
-def largest_by_variant(rows: list[dict]) -> dict[str, list[dict]]:
+def largest_by_variant(rows: Sequence[ScoreRow]) -> dict[str, list[ScoreRow]]:
     """The rows of the largest demo count, one list per variant (one row per training seed), in their order."""
-    largest = max(r["demos_tried"] for r in rows)
-    groups: dict[str, list[dict]] = {}
+    largest = max(r.demos_tried for r in rows)
+    groups: dict[str, list[ScoreRow]] = {}
     for r in rows:
-        if r["demos_tried"] == largest:
-            groups.setdefault(r["variant"], []).append(r)
+        if r.demos_tried == largest:
+            groups.setdefault(r.variant, []).append(r)
     return groups
 
 
-def mistakes_table(rows: list[dict]) -> str:
+def mistakes_table(rows: Sequence[ScoreRow]) -> str:
     """A Markdown table: per variant of the largest demo count, its boxes in a wrong bin by colour and the bin
     they went to ("red -> green 10"), summed over every training seed's episodes; variants without any are left out."""
-    counts = {variant: Counter(f"{b['color']} -> {b['bin']}" for r in group for e in r["per_episode"]
+    counts = {variant: Counter(f"{b['color']} -> {b['bin']}" for r in group for e in r.report.per_episode
                                for b in e["boxes"] if b["outcome"] == "misplaced")
               for variant, group in largest_by_variant(rows).items()}
     lines = ["| variant | boxes in a wrong bin | box colour -> the bin it went to |", "| --- | --- | --- |"]
@@ -86,15 +87,15 @@ def headline(folder: Path) -> str:
     lines = ["| baseline | policy | inputs | training | success on each variant (one seed: 95% CI, episodes; several: "
              "mean and range over the seeds) |", "| --- | --- | --- | --- | --- |"]
     for path in sorted(folder.glob("*/scores.json")):
-        scores = json.loads(path.read_text())
-        by_variant = largest_by_variant(scores["rows"])
+        scores = Results.load(path)
+        by_variant = largest_by_variant(scores.rows)
         cells = [variant_cell(v, g) for v, g in by_variant.items()]
         runs = next(iter(by_variant.values()))  # one row per training seed
         first = runs[0]
-        minutes = [scored_minutes(r) for r in runs]
+        minutes = [r.scored_minutes for r in runs]
         chosen = (f", scored at {scored_checkpoints(runs)} (chosen on validation seeds)"
-                  if any("checkpoint" in r for r in runs) else "")
-        training = (f"{first['demos']} demos, {first['steps']} updates{chosen}, {span(minutes)} min on the CPU"
+                  if any(r.checkpoint is not None for r in runs) else "")
+        training = (f"{first.demos} demos, {first.steps} updates{chosen}, {span(minutes)} min on the CPU"
                     + (f" per seed, {len(runs)} seeds" if len(runs) > 1 else ""))
         name = path.parent.name
         policy, _, inputs = label(scores).partition(", ")
@@ -103,16 +104,16 @@ def headline(folder: Path) -> str:
     return "\n".join(lines)
 
 
-def variant_cell(variant: str, rows: list[dict]) -> str:
+def variant_cell(variant: str, rows: Sequence[ScoreRow]) -> str:
     """"`default` 68% (54-79%, 50)" for one training seed (the 95% interval); "`default` mean 91%, seeds
     84-98% (3 x 50)" for several (the mean and range of the seeds' rates)."""
     if len(rows) == 1:
-        (r,) = rows
-        lo, hi = r["success_ci95"]
-        return f"`{variant}` {100 * r['success_rate']:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%, {r['episodes']})"
-    rates = [100 * r["success_rate"] for r in rows]
+        (e,) = (r.report for r in rows)
+        lo, hi = e.success_ci95
+        return f"`{variant}` {100 * e.success_rate:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%, {e.episodes})"
+    rates = [100 * r.report.success_rate for r in rows]
     return (f"`{variant}` mean {sum(rates) / len(rates):.0f}%, seeds {min(rates):.0f}-{max(rates):.0f}% "
-            f"({len(rows)} x {rows[0]['episodes']})")
+            f"({len(rows)} x {rows[0].report.episodes})")
 
 
 def fill(text: str, root: Path) -> str:
@@ -124,8 +125,8 @@ def fill(text: str, root: Path) -> str:
         path = root / m["dir"] / "scores.json"
         if not path.is_file():
             raise ConfigError(f"a scores block names {m['dir']}, which has no scores.json")
-        scores = json.loads(path.read_text())
-        note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/scores.json` ({scores['command']}):"
+        scores = Results.load(path)
+        note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/scores.json` ({scores.command}):"
         return f"{m[1]}{note}\n\n{render(scores, m['kind'])}\n\n{m[5]}"
 
     return BLOCK.sub(block, text)
