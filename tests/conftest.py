@@ -8,6 +8,7 @@ os.environ.setdefault("COLORSORT_RESULTS", "none")  # benchmark scripts a test r
 
 import pytest  # noqa: E402
 from helpers import TINY, new_env  # noqa: E402
+from scale_common import QUIET, SCALE  # noqa: E402
 
 import colorsort  # noqa: E402,F401  (registers the task)
 
@@ -49,4 +50,29 @@ def tiny_dataset(tmp_path_factory):
     root = tmp_path_factory.mktemp("datasets") / "tiny"
     summary = collect(CollectConfig(out=str(root), **TINY), progress=False, log=lambda _: None)
     assert summary.kept == 2 and not summary.errors, summary
+    return root
+
+
+# the scale and crash tests' reference datasets (one per module that asks: module scope)
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """``scale_common.SCALE``'s collection recorded in this process, one shard, no engine."""
+    from colorsort.data.collect import collect
+    from colorsort.data.config import CollectConfig
+
+    root = tmp_path_factory.mktemp("scale") / "reference"
+    summary = collect(CollectConfig(out=str(root), **{**SCALE, "shard_size": 32}), **QUIET)
+    assert summary.kept == 4 and summary.shards == 1
+    return root
+
+
+@pytest.fixture(scope="module")
+def long_reference(tmp_path_factory):
+    """As ``reference`` with 8 episodes: an interrupt after a shard's first episode leaves it 3 to go."""
+    from colorsort.data.collect import collect
+    from colorsort.data.config import CollectConfig
+
+    root = tmp_path_factory.mktemp("scale") / "long-reference"
+    summary = collect(CollectConfig(out=str(root), **{**SCALE, "episodes": 8, "shard_size": 32}), **QUIET)
+    assert summary.kept == 8 and summary.shards == 1
     return root

@@ -1,6 +1,6 @@
-"""Collection and evaluation on executors: the same data and numbers on local processes and on Ray,
-whatever the shard size; a worker killed outright loses at most its shard; --resume after any
-crash completes the dataset with every episode once. One Ray cluster (2 CPUs) for the module."""
+"""Collection and evaluation on Ray: the same data and numbers as on local processes, a killed worker retried, a
+cancel that stops a task or reports it stopped, SLURM's batch script, the docs' Ray commands. One Ray cluster (2 CPUs)
+for the module."""
 
 import json
 import os
@@ -8,95 +8,22 @@ import shlex
 import signal
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
-import numpy as np
-import pyarrow.parquet as pq
 import pytest
+from scale_common import QUIET, SCALE, kill_worker_of, same_data, same_episodes
 
 from colorsort.benchmark.evaluate import evaluate, run_evaluation
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
-from colorsort.data.store import MARKER, SHARD_MARKER
+from colorsort.data.store import MARKER
 from colorsort.data.video import read_video
 from colorsort.executors.base import ExecutorConfig
 
 pytestmark = pytest.mark.slow  # Ray clusters, killed workers, interrupted runs
 
 ray = pytest.importorskip("ray")
-
-# Four state-only episodes of two boxes each: long enough (seconds per episode) to kill a worker mid-shard.
-SCALE = dict(episodes=4, boxes_per_episode=2, cameras=(), shard_size=2)
-QUIET = dict(progress=False, log=lambda _: None)
-
-
-def frames(root: Path) -> dict:
-    """Every frame's columns, in dataset order."""
-    tables = [pq.read_table(p).to_pydict() for p in sorted((root / "data").rglob("*.parquet"))]
-    return {k: [v for t in tables for v in t[k]] for k in tables[0]}
-
-
-def same_data(a: Path, b: Path) -> None:
-    fa, fb = frames(a), frames(b)
-    assert fa.keys() == fb.keys()
-    for key in fa:
-        assert np.array_equal(np.asarray(fa[key]), np.asarray(fb[key])), key
-    assert json.loads((a / MARKER).read_text())["episodes"] == json.loads((b / MARKER).read_text())["episodes"]
-
-
-def by_episode_number(root: Path) -> dict[int, dict]:
-    """Each episode's frames, keyed by its episode number (seed - base seed), positions in the dataset left out."""
-    f, numbers = frames(root), json.loads((root / MARKER).read_text())["episodes"]
-    rows = np.asarray(f["episode_index"])
-    return {n: {k: np.asarray(v)[rows == e] for k, v in f.items() if k not in ("episode_index", "index")}
-            for e, n in enumerate(numbers)}
-
-
-def same_episodes(a: Path, b: Path) -> None:
-    """The same episodes, each with the same data, in any order (--resume appends what it records)."""
-    ea, eb = by_episode_number(a), by_episode_number(b)
-    assert sorted(ea) == sorted(eb)
-    for n in ea:
-        for key in ea[n]:
-            assert np.array_equal(ea[n][key], eb[n][key]), (n, key)
-
-
-def kill_worker_of(staging: Path, shard: str, after_s: float, killed: list) -> threading.Thread:
-    """Kill (SIGKILL) the process recording ``shard`` ``after_s`` seconds after it started it."""
-    def watch():
-        worker = staging / f"{shard}.worker.json"
-        deadline = time.monotonic() + 120
-        while not worker.is_file() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        time.sleep(after_s)
-        pid = json.loads(worker.read_text())["pid"]
-        assert not (staging / shard / SHARD_MARKER).exists(), "the shard finished before it could be killed"
-        os.kill(pid, signal.SIGKILL)
-        killed.append(pid)
-
-    thread = threading.Thread(target=watch, daemon=True)
-    thread.start()
-    return thread
-
-
-@pytest.fixture(scope="module")
-def reference(tmp_path_factory):
-    """The dataset recorded in this process, one shard, no engine."""
-    root = tmp_path_factory.mktemp("scale") / "reference"
-    summary = collect(CollectConfig(out=str(root), **{**SCALE, "shard_size": 32}), **QUIET)
-    assert summary.kept == 4 and summary.shards == 1
-    return root
-
-
-@pytest.fixture(scope="module")
-def long_reference(tmp_path_factory):
-    """As ``reference`` with 8 episodes: an interrupt after a shard's first episode leaves it 3 to go."""
-    root = tmp_path_factory.mktemp("scale") / "long-reference"
-    summary = collect(CollectConfig(out=str(root), **{**SCALE, "episodes": 8, "shard_size": 32}), **QUIET)
-    assert summary.kept == 8 and summary.shards == 1
-    return root
 
 
 @pytest.fixture(scope="module")
@@ -105,13 +32,6 @@ def cluster():
              runtime_env={"env_vars": {"MUJOCO_GL": os.environ["MUJOCO_GL"], "HF_HUB_OFFLINE": "1"}})
     yield
     ray.shutdown()
-
-
-def test_shard_size_does_not_change_the_data(reference, tmp_path):
-    out = tmp_path / "ds"
-    summary = collect(CollectConfig(out=str(out), **{**SCALE, "shard_size": 1}), **QUIET)
-    assert summary.shards == 4 and summary.kept == 4
-    same_data(reference, out)
 
 
 def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(reference, cluster, tmp_path):
@@ -123,89 +43,6 @@ def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(r
     assert killed and summary.retried == 1 and not summary.errors
     assert summary.kept == 4 and summary.dataset_episodes == 4  # every episode, once
     same_data(reference, out)
-
-
-def test_a_local_worker_killed_outright_loses_only_its_shard_and_resume_completes(reference, tmp_path):
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
-    out = tmp_path / "ds"
-    killed = []
-    # 1 s: a shard of 2 state-only episodes was once recorded within 3 s of its worker starting
-    watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 1.0, killed)
-    summary = collect(CollectConfig(out=str(out), workers=2, retries=0, **SCALE), **QUIET)
-    watcher.join()
-    assert killed and len(summary.errors) == 1 and "SIGKILL" in summary.errors[0]
-    assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]  # the other shard is kept
-    assert LeRobotDataset("local/colorsort", root=out).num_episodes == 2
-
-    summary = collect(CollectConfig(out=str(out), workers=2, resume=True, **SCALE), **QUIET)
-    assert summary.tried == 2 and summary.kept == 2 and not summary.errors
-    same_data(reference, out)
-
-
-def test_resume_after_the_whole_run_was_killed_keeps_its_finished_shards(reference, tmp_path):
-    out = tmp_path / "ds"
-    command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
-               "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "1", "--workers", "2"]
-    run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    staging = tmp_path / ".ds.staging"
-    deadline = time.monotonic() + 300
-    while len(list(staging.glob(f"shard-*/{SHARD_MARKER}"))) < 2 and time.monotonic() < deadline:
-        time.sleep(0.1)
-    run.send_signal(signal.SIGKILL)  # the collector itself, mid-run; its workers end with it
-    run.wait()
-    finished = len(list(staging.glob(f"shard-*/{SHARD_MARKER}")))
-    assert 2 <= finished < 4 and not out.exists()
-
-    again = subprocess.run(command, capture_output=True, text=True)
-    assert again.returncode == 2 and "--resume" in again.stderr  # nothing is discarded silently
-    done = subprocess.run(command + ["--resume"], capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
-    assert f"{finished} kept from the killed run" in done.stdout
-    same_data(reference, out)
-
-
-def test_a_worker_file_killed_mid_write_does_not_stop_resume(reference, tmp_path):
-    out = tmp_path / "ds"
-    command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
-               "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "1", "--workers", "2"]
-    staging = tmp_path / ".ds.staging"  # as a run killed between opening and writing a worker file leaves it
-    staging.mkdir()
-    settings = CollectConfig(out=str(out), episodes=4, boxes_per_episode=2, cameras=(), shard_size=1,
-                             workers=2).settings()
-    (staging / "run.json").write_text(json.dumps({"run": "killed-run", "settings": settings}))
-    (staging / "shard-000002.worker.json").write_text("")
-    done = subprocess.run(command + ["--resume"], capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
-    same_data(reference, out)
-
-
-def test_writes_that_must_appear_whole_leave_no_partial_file(tmp_path):
-    from colorsort.data.shards import previous_attempt
-    from colorsort.data.store import write_whole
-
-    worker = tmp_path / "shard-000000.worker.json"
-    assert previous_attempt(worker) == 0
-    write_whole(worker, {"attempt": 3})
-    assert previous_attempt(worker) == 3 and [p.name for p in tmp_path.iterdir()] == [worker.name]
-    worker.write_text("")  # what an in-place write killed after opening the file left
-    assert previous_attempt(worker) == 1
-
-
-def test_an_interrupt_during_held_interrupts_comes_after_the_block():
-    from colorsort.executors.base import held_interrupts
-
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a Ray worker, or a terminal
-    finished = []
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            with held_interrupts():
-                signal.raise_signal(signal.SIGINT)
-                time.sleep(0.01)
-                finished.append(True)
-        assert finished == [True] and signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 # Ray's cancel during held_interrupts, in a Ray cluster of its own process: in the full suite on 2 cores (five
@@ -273,49 +110,6 @@ def test_a_task_its_cancel_does_not_stop_is_reported_stopped_never_ok(cluster):
     assert result.stopped and not result.ok and result.value is None
     assert "after its cancel" in (result.error or "")
     assert time.monotonic() - started < 60
-
-
-def test_an_interrupt_while_an_episode_saves_keeps_that_episode(reference, monkeypatch, tmp_path):
-    """Ray cancels a task with a SIGINT, which can land while LeRobot saves an episode (CI caught a run that
-    lost both its shards this way): the save ends first, then the shard stops, every saved episode kept."""
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
-    from colorsort.data.recorder import record_shard
-
-    save = LeRobotDataset.save_episode
-
-    def interrupted_save(self, *args, **kwargs):
-        signal.raise_signal(signal.SIGINT)  # Ray's cancel, as it reaches a task
-        return save(self, *args, **kwargs)
-
-    monkeypatch.setattr(LeRobotDataset, "save_episode", interrupted_save)
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        config = CollectConfig(out=str(tmp_path / "ds"), **SCALE)
-        report = record_shard(config, [0, 1], tmp_path / "shard", lambda r: None)
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    assert report.interrupted and not report.incomplete and report.kept == [0] and report.tried == [0]
-    shard = LeRobotDataset(config.repo_id, root=tmp_path / "shard")
-    assert shard.meta.total_episodes == 1
-    assert shard.meta.total_frames == len(by_episode_number(reference)[0]["action"])
-
-
-def test_a_shard_from_another_run_or_with_other_settings_is_refused(tmp_path):
-    small = dict(episodes=2, cameras=(), shard_size=1)
-    settings = CollectConfig(**small).settings()
-    collect(CollectConfig(out=str(tmp_path / "ds"), **small), **QUIET)
-    staging = tmp_path / ".ds.staging"  # as a killed run of --resume --episodes 6 would leave it
-    (staging / "shard-000005" / "meta").mkdir(parents=True)
-    (staging / "run.json").write_text(json.dumps({"run": "this-run", "settings": settings}))
-    resume = CollectConfig(out=str(tmp_path / "ds"), resume=True, **{**small, "episodes": 6})
-    for marker, match in [({"run": "other-run", "settings": settings}, "comes from another run"),
-                          ({"run": "this-run", "settings": {**settings, "seed": 9}}, "other settings")]:
-        marker.update(tried=[5], kept=[5], failed={})
-        (staging / "shard-000005" / SHARD_MARKER).write_text(json.dumps(marker))
-        with pytest.raises(ValueError, match=match):
-            collect(resume, **QUIET)
-    assert json.loads((tmp_path / "ds" / MARKER).read_text())["episodes"] == [0, 1]  # untouched
 
 
 def test_evaluation_on_ray_gives_the_same_numbers_as_local(cluster):

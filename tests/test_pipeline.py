@@ -1,0 +1,405 @@
+"""colorsort-baseline's pipeline: tiny end-to-end runs of its recipes, its stages' reuse, the checkpoint
+chosen on validation seeds, a shipped README."""
+
+import json
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import cv2
+import pytest
+from baseline_common import baseline, run
+
+from colorsort.cli import baseline as colorsort_baseline
+from colorsort.cli.eval import main as eval_main
+from colorsort.data.perturbations.brightness import Brightness
+from colorsort.data.perturbations.late_pass import LatePass
+from colorsort.data.perturbations.late_pick import LatePick
+from colorsort.training import cache
+from colorsort.training.recipes import get_recipe
+
+
+@pytest.mark.slow
+def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
+    """The state-tracking recipe, tiny: two demo counts of one-box demos on the belt that never stops (each merged
+    with LeRobot's aggregate_datasets), each trained for 2 steps with a checkpoint after each; both checkpoints play
+    the validation seeds (never the evaluation seeds) and the chosen one is scored, one episode per variant; the
+    learning curve; the shipped policy, which takes the tracking belt's 24 state inputs. Then the same command again
+    reuses every finished stage, and a shorter run is taken from the longer one, bit for bit what lerobot-train
+    makes. (Several training seeds' tables: the pipeline's test with fake stages.)"""
+    from colorsort.variants import VALIDATION_SEEDS
+
+    out, ship = tmp_path / "baseline", tmp_path / "shipped"
+    argv = baseline("--recipe", "state-tracking", "--demos.counts=1,2", "--demos.train_mix=tracking:1",
+                    "--demos.boxes_per_episode=1", "--training.steps=2", "--training.small_steps=2",
+                    "--training.seeds=1000", "--training.save_every=1", "--training.batch_size=2",
+                    "--evaluation.select_episodes=1", "--evaluation.variants=tracking,tracking-fast",
+                    "--evaluation.episodes=1", "--evaluation.other_episodes=1", "--evaluation.curve_episodes=1",
+                    "--evaluation.episode_length=10", "--workers", "1", "--envs", "1", "--out", str(out))
+    first = run(argv + ["--ship", str(ship)], tmp_path, timeout=900)
+    assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
+
+    results = json.loads((out / "results.json").read_text())
+    assert [(r["demos"], r["variant"], r["seed"], r["steps"], r["checkpoint"]) for r in results["rows"]] == [
+        (1, "tracking", 1000, 2, 2), (2, "tracking", 1000, 2, 2), (2, "tracking-fast", 1000, 2, 2)]
+    assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
+    assert [p["step"] for p in results["curve"]] == [1, 2]
+    assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
+    curve = [p.name for p in (out / "curve").glob("*.json")]  # step 2's point is the full score's
+    assert len(curve) == 1 and re.fullmatch(r"demos-2-\w{8}-2steps-\w{8}-seed1000-ens0.2-1-\w{8}\.json", curve[0])
+    chose = sorted(p.name for p in (out / "select").glob("*.json"))  # 2 runs x 2 checkpoints x 1 training variant
+    assert len(chose) == 4 and all("-tracking-" in name for name in chose)
+    assert all(json.loads((out / "select" / name).read_text())["seeds"] == [VALIDATION_SEEDS[0]] for name in chose)
+    assert re.search(r"scored at 2 after \d+ min \(chosen on validation seeds\)", first.stdout)
+    assert "| tracking | ACT, state | 2 | 2 steps" in first.stdout
+    summary = first.stdout[first.stdout.rindex("| tracking-fast |"):]
+    assert summary.startswith("| tracking-fast | ACT, state | 2 | 2 steps")
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    (merged_root,) = (out / "data").glob("demos-2-*")
+    assert json.loads((merged_root / "stage.json").read_text())["drop_box_state"] is False
+    merged = LeRobotDataset("local/colorsort-baseline", root=merged_root)
+    assert merged.num_episodes == 2 and merged.meta.video_keys == []
+    for plot in ("success_vs_demos.png", "learning_curve.png"):
+        image = cv2.imread(str(out / plot))
+        assert image is not None and image.shape[0] > 200 and image.shape[1] > 300
+
+    shipped = {p.name for p in ship.iterdir()}
+    assert {"config.json", "model.safetensors", "README.md", "scores.json", "learning_curve.png"} <= shipped
+    assert any(name.startswith("policy_preprocessor") for name in shipped)
+    readme = (ship / "README.md").read_text()
+    assert "colorsort-baseline --recipe state-tracking" in readme and "commit" in readme
+    assert "| tracking-fast | ACT, state | 2 |" in readme and "| 2 (chosen) |" in readme
+    assert json.loads((ship / "scores.json").read_text())["rows"] == results["rows"]
+    assert json.loads((ship / "config.json").read_text())["input_features"]["observation.state"]["shape"] == [24]
+    assert eval_main(["--policy", str(ship), "--variant", "tracking", "--episodes", "1", "--episode-length", "5"]) == 0
+
+    again = run(argv, tmp_path, timeout=600)
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert again.stdout.count("reusing") == 2 + 2 + 4 + 3 + 1 and "lerobot-train" not in again.stdout
+    assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
+
+    # 1 update: the first update of the 2-update runs, taken, not trained, and what lerobot-train makes of 1
+    shorter = run([a.replace("steps=2", "steps=1") for a in argv] + ["--until", "train"], tmp_path, timeout=600)
+    assert shorter.returncode == 0, shorter.stderr[-3000:]
+    assert shorter.stdout.count("taking the first 1 updates of") == 2 and "lerobot-train" not in shorter.stdout
+    fresh = tmp_path / "fresh"
+    shutil.copytree(out / "data", fresh / "data")
+    trained = run(baseline("--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
+                           "--demos.boxes_per_episode=1", "--training.steps=1",
+                           "--training.seeds=1000",
+                           "--training.batch_size=2", "--workers", "1", "--out", str(fresh), "--until", "train"),
+                  tmp_path, timeout=600)
+    assert "lerobot-train" in trained.stdout, trained.stdout[-3000:] + trained.stderr[-3000:]
+    import torch
+    from safetensors.torch import load_file
+
+    (run_name,) = [p.name for p in (fresh / "train").iterdir() if p.is_dir()]
+    assert re.fullmatch(r"demos-2-\w{8}-1steps-\w{8}-seed1000", run_name)
+    taken, made = (load_file(root / "train" / run_name / "checkpoints" / "last" / "pretrained_model"
+                             / "model.safetensors") for root in (out, fresh))
+    assert taken.keys() == made.keys() and all(torch.equal(taken[k], made[k]) for k in taken)
+
+
+@pytest.mark.slow
+def test_the_camera_recipe_runs_in_small(tmp_path):
+    """The camera recipe, tiny: the policy takes the images and the arm's state, never the simulator's box state,
+    and colorsort-eval renders exactly the cameras it was trained on and refuses others."""
+    out = tmp_path / "camera"
+    result = run(baseline("--recipe", "camera", "--demos.image_size=32", "--demos.counts=1",
+                          "--demos.train_mix=default:1", "--demos.boxes_per_episode=1", "--training.steps=2",
+                          "--training.batch_size=2", "--evaluation.variants=default", "--evaluation.episodes=1",
+                          "--evaluation.curve_episodes=1",
+                          "--evaluation.episode_length=5", "--workers", "1", "--envs", "1", "--out", str(out)),
+                 tmp_path, timeout=900)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    (data,) = (out / "data").glob("demos-1-*")
+    info = json.loads((data / "meta" / "info.json").read_text())
+    assert {"observation.images.sensor", "observation.images.wrist"} <= set(info["features"])
+    assert "observation.environment_state" not in info["features"]
+    (model,) = (out / "train").glob("demos-1-*-2steps-*-seed1000/checkpoints/last/pretrained_model")
+    config = json.loads((model / "config.json").read_text())
+    assert json.loads((model / "train_config.json").read_text())["dataset"]["image_transforms"]["enable"]  # shifts
+    assert set(config["input_features"]) == {"observation.state", "observation.images.sensor",
+                                             "observation.images.wrist"}
+    assert config["input_features"]["observation.images.wrist"]["shape"] == [3, 32, 32]
+    assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 128
+    assert "| default | ACT, sensor+wrist | 1 | 2 steps" in result.stdout
+
+    from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, observation_settings
+
+    assert observation_settings(str(model), None, None) == (("sensor", "wrist"), (32, 32))
+    runner = EpisodeRunner(EvalSettings(str(model), "default", (32, 32), ("sensor", "wrist"), episode_length=3))
+    obs, _ = runner.env.reset(seed=0)
+    assert set(obs["pixels"]) == {"sensor", "wrist"} and obs["pixels"]["wrist"].shape == (32, 32, 3)
+    runner.close()
+    assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "scene"]) == 2
+    assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
+
+
+@pytest.mark.slow
+def test_the_diffusion_camera_recipe_runs_in_small(tmp_path):
+    """camera-diffusion, tiny, to its training: lerobot-train's diffusion policy with its GroupNorm ResNet,
+    spatial-softmax keypoints and crops; it reads the images and the arm's state only, and colorsort-eval refuses
+    other cameras (``test_lerobot_cli`` evaluates a diffusion policy the documented command trained)."""
+    out = tmp_path / "diffusion"
+    result = run(baseline("--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=default:1",
+                          "--demos.boxes_per_episode=1", "--training.steps=2", "--training.batch_size=2",
+                          "--workers", "1", "--out", str(out), "--until", "train"), tmp_path, timeout=900)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    assert "--policy.type=diffusion" in result.stdout
+    (run_dir,) = (out / "train").glob("demos-1-*-2steps-*-seed1000")
+    model = run_dir / "checkpoints" / "last" / "pretrained_model"
+    config = json.loads((model / "config.json").read_text())
+    assert config["type"] == "diffusion" and set(config["input_features"]) == {
+        "observation.state", "observation.images.sensor", "observation.images.wrist"}
+    assert config["input_features"]["observation.images.sensor"]["shape"] == [3, 64, 64]
+    assert (config["use_group_norm"], config["crop_shape"], config["pretrained_backbone_weights"]) == (
+        True, [58, 58], None)
+    assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "sensor"]) == 2
+
+
+def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):
+    """Each seed's run has a timing file of its own (a learning curve measures minutes from that run's start)."""
+    from colorsort.training import stages
+
+    def fake_training(cmd: list[str], log: Path) -> float:  # what lerobot-train leaves, in no time
+        run_dir = Path(next(a for a in cmd if a.startswith("--output_dir=")).split("=", 1)[1])
+        earlier = len(list(run_dir.parent.glob("*-seed*/"))) if run_dir.parent.exists() else 0
+        (run_dir / "checkpoints" / "last" / "pretrained_model").mkdir(parents=True)
+        (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").write_text("{}")
+        return 60.0 * (1 + earlier)
+
+    monkeypatch.setattr(stages, "run", fake_training)
+    recipe = get_recipe("camera")
+    first = stages.train(recipe, tmp_path / "demos-48", 100, 1000, tmp_path)
+    second = stages.train(recipe, tmp_path / "demos-48", 100, 1001, tmp_path)
+    assert first[1]["wall_s"] == 60.0 and second[1]["wall_s"] == 120.0
+    key = cache.key(stages.train_settings(recipe))
+    assert sorted(p.name for p in (tmp_path / "train").glob("*.json")) == [
+        f"demos-48-100steps-{key}-seed1000.json", f"demos-48-100steps-{key}-seed1001.json"]
+    assert first[1]["settings"] == stages.train_settings(recipe)
+    assert stages.train(recipe, tmp_path / "demos-48", 100, 1000, tmp_path) == first  # reused, its own timing
+
+
+def fake_run(run_dir: Path, steps: int, scheduler: str | None, started: float, seconds_each: float) -> None:
+    """What lerobot-train and stages.train leave for a run of ``steps`` updates, one checkpoint an update."""
+    for step in range(1, steps + 1):
+        model = run_dir / "checkpoints" / f"{step:06d}" / "pretrained_model"
+        model.mkdir(parents=True)
+        (model / "config.json").write_text(json.dumps({"type": "act", "n_action_steps": 10}))
+        (model / "train_config.json").write_text(json.dumps({"steps": steps, "scheduler": scheduler,
+                                                             "policy": {"n_action_steps": 10}}))
+        (model / "model.safetensors").write_text(f"weights after {step}")
+        state = run_dir / "checkpoints" / f"{step:06d}" / "training_state" / "training_step.json"
+        state.parent.mkdir()
+        state.write_text(json.dumps({"step": step}))
+        os.utime(state, (started + step * seconds_each, started + step * seconds_each))
+    (run_dir / "checkpoints" / "last").symlink_to(f"{steps:06d}")
+    run_dir.with_name(run_dir.name + ".json").write_text(json.dumps({"started": started,
+                                                                     "wall_s": steps * seconds_each}))
+
+
+def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_rate(tmp_path, monkeypatch):
+    """With no schedule, a run of 2 updates is the first 2 of a run of 3 with the same data, settings and seed:
+    taken from it (checkpoints, save times, its time to reach 2) instead of trained. Never from another seed's
+    run, a cosine one (its rate depends on the total) or one without that checkpoint."""
+    from colorsort.training import stages
+
+    trained = []
+    monkeypatch.setattr(stages, "run", lambda cmd, log: trained.append(cmd) or 0.0)
+    train = tmp_path / "train"
+    recipe = get_recipe("camera")
+    cosine = get_recipe("camera", {"policy.lr_schedule": "cosine"})
+    key, cos = cache.key(stages.train_settings(recipe)), cache.key(stages.train_settings(cosine))
+    fake_run(train / f"demos-8-3steps-{key}-seed1000", 3, None, started=1e9, seconds_each=600)
+    fake_run(train / f"demos-8-5steps-{key}-seed1000", 5, None, started=2e9, seconds_each=60)
+    fake_run(train / f"demos-8-3steps-{cos}-seed1001", 3, "cosine_annealing_with_warmup", 1e9, 60)
+    fake_run(train / f"demos-8-3steps-{key}-seed1002", 3, None, started=1e9, seconds_each=60)
+
+    run_dir, timing = stages.train(recipe, tmp_path / "demos-8", 2, 1000, tmp_path)
+    assert not trained and run_dir.name == f"demos-8-2steps-{key}-seed1000"
+    assert timing == {"started": 1e9, "wall_s": 1200.0, "first_updates_of": f"demos-8-3steps-{key}-seed1000"}
+    assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["000001", "000002", "last"]
+    assert (run_dir / "checkpoints" / "last" / "pretrained_model" / "model.safetensors").read_text() == \
+        "weights after 2"
+    assert [(step, minutes) for step, minutes, _ in stages.checkpoints(run_dir, timing)] == [(1, 10.0), (2, 20.0)]
+    assert stages.train(recipe, tmp_path / "demos-8", 2, 1000, tmp_path) == (run_dir, timing)  # reused now
+
+    stages.train(recipe, tmp_path / "demos-8", 4, 1000, tmp_path)  # the 5-update run: the shortest with 4
+    assert not trained
+    stages.train(cosine, tmp_path / "demos-8", 2, 1001, tmp_path)
+    stages.train(recipe, tmp_path / "demos-8", 2, 1001, tmp_path)  # seed 1001's only run is another recipe's
+    stages.train(recipe, tmp_path / "demos-8", 6, 1002, tmp_path)  # nothing longer than 6
+    assert [next(a for a in cmd if a.startswith("--steps=")) for cmd in trained] == ["--steps=2"] * 2 + ["--steps=6"]
+
+
+def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
+    """``boxes_by_variant``: the seed variant's demos hold one box each, in a part of their own, merged; the merged
+    set's key comes from its parts, so another mix is another set, never the seed variant's trained on."""
+    from colorsort.training.stages import collect, size
+
+    recipe = get_recipe("state", {"demos.train_mix": (("seed", 1.0),), "demos.counts": (1,),
+                                  "demos.boxes_by_variant": (("seed", 1),), "demos.late_pass": LatePass(0)})
+    root = collect(recipe, 1, tmp_path, workers=1)
+    (part,) = (tmp_path / "data").glob("seed-1-*")
+    assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["boxes_per_episode"] == 1
+    assert "--boxes-per-episode" in json.loads((part / "stage.json").read_text())["colorsort-collect"]
+    assert size(root) == size(part) and size(root)[0] == 1
+    assert (root / "meta" / "complete").read_text().split() == [part.name]
+    assert collect(recipe, 1, tmp_path, workers=1) == root  # reused
+
+    other_mix = get_recipe("state", {"demos.train_mix": (("default", 1.0),), "demos.counts": (1,)})
+    other = collect(other_mix, 1, tmp_path, workers=1)
+    assert other != root and size(root)[0] == size(other)[0] == 1
+
+
+def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_path):
+    """Each perturbation (``--demos.<name>``) reaches colorsort-collect for the training variants it applies to
+    and keys their parts: dim lights for the random-lights variant alone, late picks for both; ``--no-turn`` too.
+    One that applies to no training variant (late picks on a tracking belt, dim lights without a lit variant) is
+    refused, and a bad value names its range."""
+    from colorsort.training.stages import collect, collect_command, size
+
+    _, recipe = colorsort_baseline.parse_args([
+        "--recipe", "state", "--demos.train_mix=lighting:1,default:1", "--demos.counts=2",
+        "--demos.boxes_per_episode=1", "--demos.late_pass=0", "--demos.brightness=0.45,0.75", "--demos.late_pick=5",
+        "--demos.turn_to_box=false"])
+    assert [p.name for p in recipe.demos.perturbations] == ["brightness", "late_pick"]
+    assert "--brightness=0.45,0.75" not in collect_command(recipe, "default", 1, 1, 1)
+    root = collect(recipe, 2, tmp_path, workers=1)
+    assert size(root)[0] == 2
+    settings = {p.name.split("-")[0]: json.loads((p / "meta" / "colorsort.json").read_text())["settings"]
+                for p in (tmp_path / "data").glob("*-1-*")}
+    assert settings["lighting"]["brightness"] == [0.45, 0.75] and "brightness" not in settings["default"]
+    assert settings["lighting"]["late_pick"] == settings["default"]["late_pick"] == 5
+    assert settings["lighting"]["turn_to_box"] is settings["default"]["turn_to_box"] is False
+    with pytest.raises(ValueError, match="tracking belt"):
+        get_recipe("camera-tracking", {"demos.late_pick": LatePick(30)})
+    with pytest.raises(ValueError, match="lighting"):
+        get_recipe("state", {"demos.brightness": Brightness(0.45, 0.75)})
+    with pytest.raises(ValueError, match="brightness"):
+        colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--demos.brightness=0.9,0.5"])
+    with pytest.raises(ValueError, match="late_pick"):
+        colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--demos.late_pick=101"])
+
+
+def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_the_recipes_inference_settings(
+        tmp_path):
+    """On the moving belt ACT averages its chunks; the stopping belt's recipes execute 10 actions open-loop.
+    Training never reads n_action_steps or temporal_ensemble_coeff, so a reused run (trained with other values)
+    gets the recipe's in every checkpoint's config, and its evaluations are filed under the new execution."""
+    from colorsort.training.policy_settings import ActSettings
+    from colorsort.training.stages import set_inference
+
+    act = get_recipe("camera-tracking").policy
+    assert (act.type, act.n_action_steps, act.temporal_ensemble_coeff, act.execution) == ("act", 1, 0.2, "ens0.2")
+    assert "--policy.temporal_ensemble_coeff=0.2" in act.args(64) and "--policy.n_action_steps=1" in act.args(64)
+    assert get_recipe("state").policy.execution == get_recipe("camera").policy.execution == "chunk10"
+    assert get_recipe("state-tracking").policy == act
+    with pytest.raises(ValueError, match="n_action_steps=1"):
+        ActSettings(n_action_steps=10, temporal_ensemble_coeff=0.01)
+    with pytest.raises(ValueError, match="chunk_size"):
+        ActSettings(n_action_steps=30)
+
+    run_dir = tmp_path / "run"
+    for step in ("000001", "000002"):
+        model = run_dir / "checkpoints" / step / "pretrained_model"
+        model.mkdir(parents=True)
+        (model / "config.json").write_text(json.dumps({"type": "act", "dim_model": 128, "n_action_steps": 10,
+                                                       "temporal_ensemble_coeff": None}))
+        (model / "train_config.json").write_text(json.dumps({"steps": 2, "policy": {"n_action_steps": 10}}))
+    (run_dir / "checkpoints" / "last").symlink_to("000002")
+    set_inference(run_dir, get_recipe("camera-tracking"))
+    for step in ("000001", "000002", "last"):
+        model = run_dir / "checkpoints" / step / "pretrained_model"
+        assert json.loads((model / "config.json").read_text()) == {
+            "type": "act", "dim_model": 128, "n_action_steps": 1, "temporal_ensemble_coeff": 0.2}
+        assert json.loads((model / "train_config.json").read_text()) == {
+            "steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.2}}
+
+
+def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluation_seeds(tmp_path, monkeypatch):
+    """A recipe with select_episodes plays every checkpoint of each seed's run on the validation seeds of each
+    training variant; the one with the most successes there (ties: most boxes right, then the later) is scored on
+    the evaluation seeds, shipped, marked in the tables, and its point on the learning curve is its full score's."""
+    from colorsort.training import pipeline, ship, stages
+    from colorsort.variants import EVAL_SEEDS, VALIDATION_SEEDS
+
+    assert not set(VALIDATION_SEEDS) & set(EVAL_SEEDS)
+    validation = {  # successes on the validation seeds, per (seed, update): seed 1000 peaks at 2, 1001 ties 2 and 3
+        (1000, 1): 1, (1000, 2): 4, (1000, 3): 2, (1001, 1): 0, (1001, 2): 3, (1001, 3): 3}
+    evaluated: list[tuple[str, str, int | None]] = []
+
+    def fake_evaluate(recipe, model, variant, episodes, stem, envs, log_dir, first_seed=None):
+        step = int(Path(model).parent.name) if Path(model).parent.name.isdigit() else 3
+        seed = int(str(model).split("-seed")[1][:4])
+        evaluated.append((Path(model).parent.name, variant, first_seed))
+        successes = validation[seed, step] // 2 if first_seed is not None else step
+        episodes_run = 2 if first_seed is not None else episodes
+        return {"policy": str(model), "variant": variant, "episodes": episodes_run, "successes": successes,
+                "success_rate": successes / episodes_run, "success_ci95": [0.0, 1.0], "correct": 3 * successes,
+                "misplaced": 0, "dropped": 0, "distractors": 0, "distractors_let_through": 0,
+                "boxes_per_minute": 1.0, "mean_cycle_time_s": 2.0,
+                "per_episode": [{"success": k < successes, "correct": 3 * (k < successes), "misplaced": 0,
+                                 "dropped": 0} for k in range(episodes_run)]}
+
+    def fake_train(recipe, data, steps, seed, out):
+        run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
+        fake_run(run_dir, steps, None, started=1e9, seconds_each=60)
+        return run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
+
+    monkeypatch.setattr(stages, "collect", lambda recipe, n, out, workers: out / "data" / f"demos-{n}")
+    monkeypatch.setattr(stages, "size", lambda data: (4, 400))
+    monkeypatch.setattr(stages, "train", fake_train)
+    monkeypatch.setattr(stages, "evaluate", fake_evaluate)
+    monkeypatch.setattr(ship, "parameters", lambda model: 1000)  # the fake runs' weights are text
+    recipe = get_recipe("state-tracking", {
+        "demos.counts": (4,), "training.steps": 3, "training.save_every": 1, "evaluation.select_episodes": 2,
+        "training.seeds": (1000, 1001), "evaluation.variants": ("tracking", "tracking-jitter"),
+        "evaluation.episodes": 4, "evaluation.other_episodes": 4, "evaluation.curve_episodes": 4})
+    ship_to = tmp_path / "shipped"
+    results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / "out", envs=1), "cmd", ship_to)
+
+    first = VALIDATION_SEEDS[0]
+    chose = [e for e in evaluated if e[2] is not None]
+    assert chose == [(f"{s:06d}", v, first) for _ in (1000, 1001) for s in (1, 2, 3)
+                     for v in ("tracking", "tracking-jitter")]
+    scored = [(e[0], e[1]) for e in evaluated if e[2] is None]
+    assert scored[:2] == [("000002", "tracking"), ("000002", "tracking-jitter")]  # seed 1000: update 2
+    assert scored[-2:] == [("last", "tracking"), ("last", "tracking-jitter")]  # seed 1001's tie: the later (3)
+    assert [(r.seed, r.checkpoint, r.report.success_rate) for r in results.rows] == [
+        (1000, 2, 0.5), (1000, 2, 0.5), (1001, 3, 0.75), (1001, 3, 0.75)]
+    assert [p.successes for p in results.rows[0].validation] == [0, 4, 2]  # 2 variants, half each
+    assert [(p.step, p.successes) for p in results.curve] == [(1, 1), (2, 2), (3, 3)]
+    assert (ship_to / "model.safetensors").read_text() == "weights after 2"
+    readme = (ship_to / "README.md").read_text()
+    assert "scored at 2/3 after 2/3 min (chosen on validation seeds)" in readme and "| 1000 | 2 (chosen) |" in readme
+    assert f"({first} on, never scored" in readme
+    with pytest.raises(ValueError, match="save_every"):
+        get_recipe("camera-tracking", {"training.save_every": 0})
+    with pytest.raises(ValueError, match="validation seeds"):
+        get_recipe("camera-tracking", {"evaluation.select_episodes": len(VALIDATION_SEEDS) + 1})
+
+
+def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):
+    """Reshipping replaces the tracked files of the folder it ships to: that alone is no uncommitted change."""
+    from colorsort.training.ship import commit
+
+    def git(*args: str) -> None:
+        subprocess.run(["git", *args], cwd=tmp_path, check=True, capture_output=True)
+
+    git("init", "-q")
+    (tmp_path / "baselines" / "p").mkdir(parents=True)
+    (tmp_path / "baselines" / "p" / "model.safetensors").write_text("old weights")
+    (tmp_path / "code.py").write_text("x = 1\n")
+    git("add", ".")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "one")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "baselines" / "p" / "model.safetensors").write_text("new weights")
+    assert not commit(Path("baselines/p")).endswith("(with uncommitted changes)")
+    assert commit().endswith("(with uncommitted changes)")
+    (tmp_path / "code.py").write_text("x = 2\n")
+    assert commit(Path("baselines/p")).endswith("(with uncommitted changes)")

@@ -1,0 +1,292 @@
+"""The learned baselines' recipes as configuration: sections, generated flags, perturbations, cache keys, and
+the scores tables written from scores.json."""
+
+import json
+import os
+import subprocess
+
+import pytest
+from baseline_common import REPO, SHIPPED, baseline, run, score_row, scores
+from helpers import exit_status
+
+from colorsort.cli import baseline as colorsort_baseline
+from colorsort.data.perturbations.late_pass import LatePass
+from colorsort.data.perturbations.late_pick import LatePick
+from colorsort.training import cache
+from colorsort.training.recipes import RECIPES, get_recipe
+
+
+def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encoder(tmp_path):
+    """Its command line: LeRobot's diffusion type, GroupNorm, no pretrained weights (a download), one shared
+    encoder, a crop of 0.9 of the recipe's image side; its settings refuse what LeRobot would reject later."""
+    from colorsort.cli.baseline import main
+    from colorsort.training.policy_settings import DiffusionSettings
+    from colorsort.training.stages import train_command
+
+    recipe = get_recipe("camera-diffusion")
+    cmd = train_command(recipe, tmp_path / "demos-48", 5000, 1000, tmp_path / "run")
+    for arg in ("--policy.type=diffusion", "--policy.use_group_norm=true", "--policy.pretrained_backbone_weights=null",
+                "--policy.use_separate_rgb_encoder_per_camera=false", "--policy.crop_shape=[58,58]",
+                "--policy.down_dims=[32,64]", "--policy.n_obs_steps=1", "--policy.num_inference_steps=10"):
+        assert arg in cmd
+    assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", {"demos.image_size": 32}),
+                                                          tmp_path, 1, 1, tmp_path)
+    assert recipe.policy.execution == "chunk8" and recipe.label.startswith("diffusion, ")
+    assert not any(a.startswith("--policy.type=act") or "dim_model" in a for a in cmd)
+    with pytest.raises(ValueError, match="multiple of"):
+        DiffusionSettings(horizon=10)
+    with pytest.raises(ValueError, match="n_action_steps"):
+        DiffusionSettings(n_action_steps=17)
+    with pytest.raises(ValueError, match="crop_fraction"):
+        DiffusionSettings(crop_fraction=0.2)
+    assert exit_status(main, ["--recipe", "camera-diffusion", "--policy.lr_schedule=cosine",
+                              "--out", str(tmp_path)]) == 2
+
+
+def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(tmp_path):
+    """``--policy.optimizer_lr``: ACT's rate in the ``lerobot-train`` command and a run folder of its own (a run at
+    another rate is never reused); a policy without the field has no such flag."""
+    from colorsort.training.stages import train_command, train_settings
+
+    _, recipe = colorsort_baseline.parse_args(["--recipe", "camera", "--policy.optimizer_lr=3e-4",
+                                               "--policy.optimizer_lr_backbone=3e-4"])
+    cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
+    assert "--policy.optimizer_lr=0.0003" in cmd and "--policy.optimizer_lr_backbone=0.0003" in cmd
+    assert cache.key(train_settings(recipe)) != cache.key(train_settings(get_recipe("camera")))
+    assert exit_status(colorsort_baseline.main, ["--recipe", "camera-diffusion", "--policy.optimizer_lr=3e-4",
+                                                 "--out", str(tmp_path)]) == 2
+
+
+def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
+    """``image_shift``: LeRobot's own image transforms, one random shift per image, and a run folder of its own."""
+    import draccus
+    import torch
+    from lerobot.configs.default import DatasetConfig
+    from lerobot.transforms.transforms import ImageTransforms
+
+    from colorsort.training.stages import train_command
+
+    shifted = get_recipe("camera")
+    args = shifted.training.augment_args()
+    assert shifted.training.image_shift == 0.1
+    assert get_recipe("camera", {"training.image_shift": 0}).training.augment_args() == []
+    assert set(args) <= set(train_command(shifted, tmp_path, 10, 1000, tmp_path / "run"))
+    config = draccus.parse(DatasetConfig, args=["--repo_id=local/x", *[a.replace("--dataset.", "--") for a in args]])
+    transforms = ImageTransforms(config.image_transforms)
+    image = torch.zeros(3, 32, 32)
+    image[:, 12:20, 12:20] = 1.0
+    moved = [transforms(image) for _ in range(20)]
+    assert all(m.shape == image.shape and m.sum() == image.sum() for m in moved)  # moved whole, no border reached
+    offsets = {tuple(torch.nonzero(m[0])[0].tolist()) for m in moved}
+    assert len(offsets) > 1 and all(abs(r - 12) <= 3 and abs(c - 12) <= 3 for r, c in offsets)  # 0.1 of 32 px
+    for bad in ({"training.image_shift": 0.5}, {"training.image_shift": -0.1}, {"demos.cameras": ()}):
+        with pytest.raises(ValueError, match="image_shift"):
+            get_recipe("camera", bad)
+
+
+def test_relit_training_images_vary_as_the_lighting_variant_but_keep_every_box_colour(tmp_path):
+    """``image_relight``: LeRobot's ``ColorJitter`` and ``PlanckianJitter`` on every image beside the shift:
+    darker and brighter, warmer and colder, and a red, green or blue box keeps its strongest channel."""
+    import draccus
+    import torch
+    from lerobot.configs.default import DatasetConfig
+    from lerobot.transforms.transforms import ImageTransforms
+
+    from colorsort.training.stages import train_command
+
+    _, relit = colorsort_baseline.parse_args(["--recipe", "camera", "--training.image_relight=true"])
+    args = relit.training.augment_args()
+    assert "--dataset.image_transforms.max_num_transforms=3" in args
+    assert set(args) <= set(train_command(relit, tmp_path, 10, 1000, tmp_path / "run"))
+    config = draccus.parse(DatasetConfig, args=["--repo_id=local/x", *[a.replace("--dataset.", "--") for a in args]])
+    transforms = ImageTransforms(config.image_transforms)
+    image = torch.full((3, 32, 32), 0.4)  # a grey belt around three saturated boxes
+    for channel, (r, c) in enumerate(((4, 4), (4, 20), (20, 12))):
+        image[:, r:r + 8, c:c + 8] = 0.1
+        image[channel, r:r + 8, c:c + 8] = 0.6
+    torch.manual_seed(0)
+    relit_images = [transforms(image) for _ in range(40)]
+    grey = torch.stack([m[:, 16, 8:24].mean(dim=1) for m in relit_images])  # belt that no 3 px shift moves off
+    assert grey.sum(dim=1).min() < 0.8 * 1.2 < 1.2 * 1.2 < grey.sum(dim=1).max()  # dimmer and brighter than 1.2
+    assert (grey[:, 0] > grey[:, 2] * 1.1).any() and (grey[:, 2] > grey[:, 0] * 1.1).any()  # warm and cold
+    for m in relit_images:
+        for channel, (r, c) in enumerate(((4, 4), (4, 20), (20, 12))):
+            box = m[:, r + 3:r + 5, c + 3:c + 5].mean(dim=(1, 2))  # the middle of the box, inside any shift
+            assert int(box.argmax()) == channel
+    with pytest.raises(ValueError, match="image_relight"):
+        get_recipe("state", {"training.image_relight": True})
+
+
+def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
+    from colorsort.cli.baseline import main
+
+    for argv, named in ((["--recipe", "nope"], "Valid recipes"),
+                        (["--demos.train_mix=default:1,nope:1"], "Valid variants"),
+                        (["--demos.counts=50,20"], "increasing"),
+                        (["--demos.cameras=top"], "Valid cameras"),
+                        (["--demos.train_mix=default:x"], "not a valid float"),
+                        (["--training.image_relight=maybe"], "true or false"),
+                        (["--training.device=tpu"], "valid devices")):
+        assert main([*argv, "--out", str(tmp_path)]) == 2, argv
+        assert named in capsys.readouterr().err, argv
+    assert exit_status(main, ["--until", "later"]) == 2
+
+
+def test_baseline_help_shows_a_flag_for_every_recipe_field_and_perturbation():
+    """``colorsort-baseline --help``: flags generated from the recipe's sections (each with the chosen recipe's
+    value) and the perturbation registry; ``Recipe.override`` takes what they parse to, and refuses an unknown key."""
+    from dataclasses import fields
+
+    from colorsort.data.perturbations import PERTURBATIONS
+
+    help_text = subprocess.run(baseline("--recipe", "camera-snapshot", "--help"), capture_output=True, text=True,
+                               env={**os.environ, "COLUMNS": "1000"}, timeout=60).stdout
+    recipe = get_recipe("camera-snapshot")
+    for section in ("demos", "policy", "training", "evaluation"):
+        for f in fields(getattr(recipe, section)):
+            if f.init and f.name != "perturbations":
+                assert f"--{section}.{f.name}" in help_text, (section, f.name)
+    assert all(f"--demos.{name}" in help_text for name in PERTURBATIONS)
+    assert "(recipe 'camera-snapshot': 4000)" in help_text and "(recipe 'camera-snapshot': 10)" in help_text
+    with pytest.raises(ValueError, match="Valid settings"):
+        recipe.override({"training.stpes": 10})
+
+
+def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
+    stored = get_recipe("camera-snapshot").to_json()
+    assert json.loads(json.dumps(stored)) == stored
+    assert stored["demos"]["perturbations"] == {"brightness": [0.45, 0.75], "late_pass": 100, "late_pick": 10}
+    assert stored["policy"]["type"] == "act" and stored["training"]["steps"] == 4000
+    from colorsort.training.records import Results
+    from colorsort.training.tables import label
+
+    assert label(Results.from_json(scores([], stored))) == "ACT, snapshot"
+    assert label(Results.from_json(scores([], {"cameras": ["sensor", "wrist"]}))) == "ACT, sensor+wrist"  # flat
+
+
+def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_state():
+    assert get_recipe("state").demos.split(40) == {"default": 8, "jitter": 8, "fast": 8, "distractors": 16}
+    camera = get_recipe("camera")
+    assert camera.demos.split(48) == {"default": 8, "lighting": 8, "jitter": 8, "fast": 8, "distractors": 16}
+    one_box_seed = get_recipe("camera", {"demos.train_mix": camera.demos.train_mix + (("seed", 1),),
+                                         "demos.boxes_by_variant": (("seed", 1),)})
+    assert (one_box_seed.demos.boxes("seed"), one_box_seed.demos.boxes("jitter")) == (1, camera.demos.boxes_per_episode)
+    assert sum(camera.demos.split(7).values()) == 7
+    training = camera.training
+    assert (training.updates(True, 1000), training.updates(False, 1000)) == (training.steps, training.small_steps)
+    with pytest.raises(ValueError, match="at least 1 box"):
+        get_recipe("camera", {"demos.boxes_by_variant": (("seed", 0),)})
+    with pytest.raises(ValueError, match="Valid variants"):
+        get_recipe("camera", {"demos.boxes_by_variant": (("nope", 1),)})
+    alike = get_recipe("state", {"demos.counts": (8, 40), "training.passes": 10.0, "training.batch_size": 64})
+    assert (alike.training.updates(False, 2560), alike.training.updates(True, 12800)) == (400, 2000)
+    with pytest.raises(ValueError, match="seeds"):
+        get_recipe("state", {"training.seeds": (1, 1)})
+    with pytest.raises(ValueError, match="passes"):
+        get_recipe("state", {"training.passes": 0.0})
+    for recipe in RECIPES.values():
+        assert recipe.evaluation.main_variant in recipe.evaluation.variants
+    tracking = get_recipe("camera-tracking")
+    assert set(tracking.evaluation.variants) == {"tracking", "tracking-jitter", "tracking-fast"}
+    assert tracking.demos.cameras
+
+
+@pytest.mark.slow
+def test_documented_recipe_list_runs_verbatim():
+    """docs/baselines.md's `colorsort-baseline --list`, as written: one line per recipe."""
+    page = (REPO / "docs" / "baselines.md").read_text()
+    assert "colorsort-baseline --list\n" in page
+    result = run(baseline("--list"), REPO, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert [line.split()[0] for line in result.stdout.splitlines()] == list(RECIPES)
+
+
+def test_docs_tables_are_the_ones_scores_json_gives():
+    """Every scores block in README and docs/ is what `python tools/baseline_tables.py` writes from its JSON;
+    every shipped baseline with scores.json has its table in the docs."""
+    from colorsort.training.tables import fill, pages
+
+    text = {page: page.read_text() for page in pages(REPO)}
+    for page, body in text.items():
+        assert fill(body, REPO) == body, f"{page} is stale: run python tools/baseline_tables.py"
+    for name, path in SHIPPED.items():
+        if (path / "scores.json").is_file():
+            assert any(f"<!-- scores baselines/{name} table -->" in t for t in text.values()), name
+
+
+def test_training_times_over_seeds_read_as_one_figure_when_they_round_alike():
+    from colorsort.training.report import span
+
+    assert span([53.6, 53.9, 54.2]) == "54"
+    assert span([49.2, 57.4]) == "49-57"
+    assert span([42.0]) == "42"
+
+
+def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
+    from colorsort.training.tables import fill
+
+    stale = "before\n<!-- scores baselines/act-camera curve -->\n| old | numbers |\n<!-- end scores -->\nafter\n"
+    new = fill(stale, REPO)
+    assert "| old |" not in new and "| updates | training [min] |" in new
+    assert new.startswith("before\n") and new.endswith("<!-- end scores -->\nafter\n") and fill(new, REPO) == new
+    with pytest.raises(ValueError, match="Valid kinds"):
+        fill("<!-- scores baselines/act-camera plot -->\n<!-- end scores -->", REPO)
+    with pytest.raises(ValueError, match="no scores.json"):
+        fill("<!-- scores baselines/nothing table -->\n<!-- end scores -->", REPO)
+
+
+def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_path):
+    """One seed: the rate with its Wilson interval; three seeds: their mean and range, never one cell per seed."""
+    from colorsort.training.tables import headline
+
+    def row(variant: str, seed: int, rate: float) -> dict:
+        return score_row(variant=variant, seed=seed, success_rate=rate, success_ci95=[rate - 0.1, rate + 0.05])
+
+    for name, rows in (("one", [row("default", 1000, 0.9)]),
+                       ("three", [row(v, s, r) for s, r in ((1000, 0.9), (1001, 0.6), (1002, 0.75))
+                                  for v in ("default", "fast")])):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "scores.json").write_text(json.dumps(scores(rows)))
+    point = {"episodes": 10, "successes": 5, "correct": 15, "misplaced": 0, "dropped": 0}
+    chosen = [{**row("default", s, 1.0), "checkpoint": c,
+               "validation": [{"step": 2500, "minutes": 10.0, **point}, {"step": 5000, "minutes": 20.0, **point}]}
+              for s, c in ((1000, 5000), (1001, 2500))]
+    (tmp_path / "two").mkdir()
+    (tmp_path / "two" / "scores.json").write_text(json.dumps(scores(chosen)))
+    one, three, two = headline(tmp_path).splitlines()[2:]
+    assert "`default` 90% (80-95%, 50)" in one and "20 min on the CPU |" in one
+    assert "`default` mean 75%, seeds 60-90% (3 x 50); `fast` mean 75%" in three
+    assert "per seed, 3 seeds" in three and three.count("`default`") == 1
+    # each run scored at the checkpoint its validation seeds chose: the training time is that checkpoint's
+    assert "5000 updates, scored at 5000/2500 (chosen on validation seeds), 10-20 min on the CPU per seed" in two
+
+
+def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
+    """Two seeds' misplaced boxes add up per (colour, bin); correct and dropped boxes and smaller demo counts do not."""
+    from colorsort.training.records import Results
+    from colorsort.training.tables import render
+
+    def row(seed: int, demos: int, boxes: list[tuple[str, str, str | None]]) -> dict:
+        episode = {"boxes": [{"color": c, "outcome": o, "bin": b} for c, o, b in boxes]}
+        return score_row(demos_tried=demos, variant="jitter", seed=seed, per_episode=[episode])
+
+    rows = [row(1000, 48, [("red", "misplaced", "green"), ("blue", "correct", "blue"), ("red", "dropped", None)]),
+            row(1001, 48, [("red", "misplaced", "green"), ("blue", "misplaced", "green")]),
+            row(1000, 8, [("green", "misplaced", "red")])]
+    table = render(Results.from_json(scores(rows)), "mistakes")
+    assert table.splitlines()[2] == "| jitter | 3 | red -> green 2, blue -> green 1 |"
+    clean = [row(1000, 48, [("red", "correct", "red")])]
+    assert render(Results.from_json(scores(clean)), "mistakes").endswith("| every variant | 0 | |")
+
+
+def test_a_shipped_readme_says_how_the_demos_were_made():
+    """The README's demo line gives each variant's count, with the perturbations that act on some variants only
+    after them, and those on every variant once at the end, each as it describes itself."""
+    from colorsort.training.ship import demo_line
+
+    assert demo_line(get_recipe("camera-snapshot")) == (
+        "8 on default, 8 on lighting under lights of brightness x0.45-0.75, 8 on jitter, 8 on fast, 16 on "
+        "distractors; 3 boxes each; every belt pass held back 0-100 steps; every pick held back 0-10 steps")
+    assert demo_line(get_recipe("state", {"demos.late_pass": LatePass(0), "demos.late_pick": LatePick(5)})) == (
+        "8 on default, 8 on jitter, 8 on fast, 16 on distractors; 3 boxes each; every pick held back 0-5 steps")
+    assert demo_line(get_recipe("camera-tracking")) == "24 on tracking, 24 on tracking-jitter; 5 boxes each"

@@ -1,0 +1,198 @@
+"""The shipped baselines in both tools (colorsort-eval, lerobot-eval), how they execute, and the analyses of
+their scores."""
+
+import json
+from pathlib import Path
+
+import pytest
+from baseline_common import BIN, SHIPPED, run, score_row, scores
+
+from colorsort.cli.eval import main as eval_main
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(SHIPPED))
+def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
+    """README's command for a shipped policy on its main variant's first seed: cameras come from the checkpoint."""
+    if not SHIPPED[name].is_dir():
+        pytest.skip(f"baselines/{name} is not shipped")
+    scores_path = SHIPPED[name] / "scores.json"
+    scores = json.loads(scores_path.read_text()) if scores_path.is_file() else {}
+    variant = scores.get("recipe", {}).get("main_variant", "default")
+    report = tmp_path / "eval.json"
+    assert eval_main(["--policy", str(SHIPPED[name]), "--variant", variant, "--episodes", "1",
+                      "--json", str(report)]) == 0
+    result = json.loads(report.read_text())
+    assert result["correct"] >= 1  # it picks and places: not an untrained policy
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(SHIPPED))
+def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
+    """README's lerobot-eval command for a shipped policy: it loads and acts, one episode of 100 steps."""
+    if not SHIPPED[name].is_dir():
+        pytest.skip(f"baselines/{name} is not shipped")
+    from colorsort.benchmark.policies import checkpoint_cameras
+
+    cameras, size = checkpoint_cameras(SHIPPED[name])
+    task = "ColorSort-Tracking-v0" if "tracking" in name else "ColorSort-Default-v0"
+    result = run([str(BIN / "lerobot-eval"), "--env.type=colorsort", f"--env.task={task}",
+                  f"--env.cameras={','.join(cameras) or 'none'}", f"--env.image_size={size[0] if size else 128}",
+                  f"--policy.path={SHIPPED[name]}", "--policy.device=cpu", "--eval.n_episodes=1",
+                  "--eval.batch_size=1", "--env.episode_length=100", f"--output_dir={tmp_path / 'eval'}"],
+                 tmp_path, timeout=600)
+    assert result.returncode == 0, result.stderr[-3000:]
+    overall = json.loads((tmp_path / "eval" / "eval_info.json").read_text())["overall"]
+    assert overall["n_episodes"] == 1 and 0 <= overall["pc_success"] <= 100
+
+
+@pytest.mark.parametrize("variant", ["robots-panda", "tracking"])
+def test_a_checkpoint_on_a_variant_it_does_not_fit_gets_a_one_line_error(variant, capsys):
+    """act-state takes 23 state inputs: the Panda's state has 25, a tracking belt's 24."""
+    assert eval_main(["--policy", str(SHIPPED["act-state"]), "--variant", variant, "--episodes", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"cannot run on {variant}" in err and "'default'" in err
+
+
+def test_a_recipe_scored_on_a_variant_its_policy_cannot_run_on_gets_a_one_line_error(capsys, tmp_path):
+    """The pipeline refuses before collecting anything: a stopping-belt policy cannot run on a tracking belt."""
+    from colorsort.cli.baseline import main as baseline_main
+
+    out = tmp_path / "never"
+    assert baseline_main(["--recipe", "state", "--evaluation.variants=default,tracking", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "['tracking'] do not fit" in err and "'distractors'" in err
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_variant_all_runs_each_shipped_baseline_on_exactly_the_variants_it_fits(capsys):
+    """A stopping-belt policy (23 state inputs) skips the tracking variants (24) and the Panda (25); the tracking
+    policy runs on the three tracking variants only; every skipped variant is named with its reason."""
+    from colorsort.cli.eval import variant_names
+
+    tracking = ["tracking", "tracking-fast", "tracking-jitter"]
+    for name, path in SHIPPED.items():
+        if not path.is_dir():
+            continue
+        fits = variant_names(str(path), "all")
+        skipped = capsys.readouterr().err
+        if "tracking" in name:
+            assert fits == tracking
+        else:
+            assert not set(fits) & {*tracking, "robots-panda"}
+            assert {"seed", "default", "fast", "jitter", "lighting", "distractors"} <= set(fits)
+        assert all(f"skipping {v}:" in skipped for v in ["robots-panda", *(set(tracking) - set(fits))])
+
+
+@pytest.mark.slow
+def test_an_execution_is_the_same_checkpoint_acting_as_named(tmp_path):
+    """``with_execution``'s copy of a checkpoint executes as named: LeRobot loads it with that many open-loop steps or
+    with its temporal ensembler; the weights are the shipped ones; a bad name is refused."""
+    from colorsort.benchmark.execution import inference_settings, with_execution
+    from colorsort.benchmark.policies import LeRobotPolicy
+
+    chunked = LeRobotPolicy(with_execution(SHIPPED["act-state"], "chunk5", tmp_path)).policy
+    ensembled = LeRobotPolicy(with_execution(SHIPPED["act-state"], "ens0.01", tmp_path)).policy
+    assert (chunked.config.n_action_steps, chunked.config.temporal_ensemble_coeff) == (5, None)
+    assert ensembled.config.n_action_steps == 1 and ensembled.temporal_ensembler.chunk_size == 20
+    assert (tmp_path / "chunk5" / "model.safetensors").read_bytes() == (
+        SHIPPED["act-state"] / "model.safetensors").read_bytes()
+    with pytest.raises(ValueError, match="chunkN"):
+        inference_settings("open10")
+
+
+def test_executions_are_compared_on_each_variant_named_and_on_validation_seeds_when_asked(monkeypatch):
+    """``execution_table``: one row per variant and execution, each scored on that variant; ``validation`` plays the
+    validation seeds (from 20000), never the evaluation seeds; an unknown variant or execution stops before any
+    episode runs."""
+    from types import SimpleNamespace
+
+    from colorsort.benchmark import evaluate as evaluation
+    from colorsort.benchmark.execution import execution_table
+    from colorsort.variants import VALIDATION_SEEDS
+
+    played = []
+
+    def fake_evaluate(policy, variant, episodes, **kwargs):
+        played.append((Path(policy).name, variant, kwargs["seed"]))
+        return SimpleNamespace(success_ci95=(0.0, 1.0), success_rate=1.0, correct=3, misplaced=0, dropped=0,
+                               distractors_let_through=0, distractors=0)
+
+    monkeypatch.setattr(evaluation, "evaluate", fake_evaluate)
+    policy = str(SHIPPED["act-state"])
+    for validation, first in ((False, None), (True, VALIDATION_SEEDS[0])):
+        played.clear()
+        lines = list(execution_table(policy, ["default", "distractors"], ["chunk10", "ens0.2"], 2, 1, validation))
+        assert played == [(e, v, first) for v in ("default", "distractors") for e in ("chunk10", "ens0.2")]
+        assert [line.split(" | ")[:2] for line in lines[3:]] == [["| default", "chunk10"], ["| default", "ens0.2"],
+                                                                 ["| distractors", "chunk10"],
+                                                                 ["| distractors", "ens0.2"]]
+    assert "first 2 validation seeds" in lines[0]
+    played.clear()
+    for variants, executions, named in ((["default", "nope"], ["chunk10"], "Valid variants"),
+                                        (["default"], ["open10"], "chunkN")):
+        with pytest.raises(ValueError, match=named):
+            list(execution_table(policy, variants, executions, 1))
+    assert not played
+
+
+@pytest.mark.parametrize("name", list(SHIPPED))
+def test_a_shipped_scores_json_reads_as_typed_records_and_writes_back_unchanged(name):
+    """Results as typed records: every shipped scores.json reads into ``Results`` and writes back the same JSON, so
+    the records change no figure of a shipped baseline."""
+    from colorsort.training.records import Results
+
+    stored = json.loads((SHIPPED[name] / "scores.json").read_text())
+    results = Results.from_json(stored)
+    assert results.to_json() == {**stored, "curve": stored.get("curve") or []}
+    assert all(r.report.episodes == len(r.report.per_episode) for r in results.rows)
+
+
+def test_first_box_delay_is_the_median_over_the_seeds_both_runs_placed_a_box(tmp_path):
+    """``colorsort-analyze first-box-delay``: seed 1's first placed box 0.5 s later, seed 2's 1.0 s, seed 3 placed
+    nothing in one run (left out): median 0.75 s over 2 seeds; two runs with no seed in common are refused."""
+    def evaluation(times: dict[int, list[tuple[float, str]]]) -> dict:
+        return {"variant": "default", "mean_cycle_time_s": 4.0, "per_episode": [
+            {"seed": s, "boxes": [{"time": t, "outcome": o} for t, o in boxes]} for s, boxes in times.items()]}
+
+    new = evaluation({1: [(7.5, "placed"), (12.0, "placed")], 2: [(6.0, "dropped"), (9.0, "placed")],
+                      3: [(8.0, "placed")]})
+    old = evaluation({1: [(7.0, "placed")], 2: [(8.0, "placed")], 3: [(8.0, "dropped")]})
+    (tmp_path / "new.json").write_text(json.dumps(new))
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    out = run([str(BIN / "colorsort-analyze"), "first-box-delay", "new.json", "old.json"], tmp_path, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("first box placed +0.75 s later (median over 2 seeds, default)")
+    (tmp_path / "other.json").write_text(json.dumps(evaluation({9: [(7.0, "placed")]})))
+    refused = run([str(BIN / "colorsort-analyze"), "first-box-delay", "new.json", "other.json"], tmp_path,
+                  timeout=60)
+    assert refused.returncode == 2 and "no evaluation seed where both runs placed a box" in refused.stderr
+
+
+def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
+    """``colorsort-analyze compare``: each seed's rate, their mean, and box counts summed over the seeds; a variant only
+    one run has gets a dash on the other side."""
+    def row(variant: str, rate: float, correct: int, misplaced: int) -> dict:
+        return score_row(demos_tried=48, variant=variant, success_rate=rate, correct=correct, misplaced=misplaced)
+
+    new = scores([row("seed", 1.0, 40, 0), row("seed", 0.5, 20, 10), row("jitter", 0.25, 9, 6)])
+    old = scores([row("seed", 0.25, 10, 12)])
+    for name, run_scores in (("new.json", new), ("old.json", old)):
+        (tmp_path / name).write_text(json.dumps(run_scores))
+    out = run([str(BIN / "colorsort-analyze"), "compare", "new.json", "old.json", "--labels", "a,b"], tmp_path, 60)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0].startswith("| variant | a: mean (each seed) | b: mean (each seed) |")
+    assert lines[2] == "| `seed` | 75% (100%, 50%) | 25% (25%) | 60 / 10 / 0 | 10 / 12 / 0 |"
+    assert lines[3] == "| `jitter` | 25% (25%) | - | 9 / 6 / 0 | - |"
+    assert lines[4] == "| every variant (mean of the variants' means) | 50% | 25% | | |"
+
+
+def test_loading_a_checkpoint_prints_nothing_into_a_benchmarks_recorded_figures(capsys):
+    """LeRobot's "Loading weights from local directory" stays out of stdout, which benchmarks record to docs/results."""
+    from colorsort.benchmark.policies import LeRobotPolicy
+
+    capsys.readouterr()
+    LeRobotPolicy(SHIPPED["act-state"])
+    assert capsys.readouterr().out == ""
