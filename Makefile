@@ -41,9 +41,10 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/mypy
 
-# two pytest workers (the machines have 2 cores and many tests wait on subprocesses); --dist loadfile keeps each
-# module in one worker, so module fixtures are built once and only one Ray cluster runs at a time
-PYTEST := $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
+# three pytest workers on the 2-core machines: many tests wait on subprocesses (Ray, lerobot-train, colorsort-eval),
+# and a third worker fills those waits; --dist loadfile keeps each module in one worker, so module fixtures are built
+# once and only one Ray cluster runs at a time
+PYTEST := $(VENV)/bin/python -m pytest -q -n 3 --dist loadfile
 
 test: lint
 	$(PYTEST) tests
@@ -77,7 +78,6 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
 	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
 	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
-	$(VENV)/bin/python benchmarks/bench_ci.py
 
 # a learned baseline: demos, lerobot-train, colorsort-eval, learning curve (`make baseline RECIPE=camera-tracking`;
 # `colorsort-baseline --list` names the recipes); about 1.5 h a recipe on 2 CPU cores

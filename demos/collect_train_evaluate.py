@@ -1,7 +1,7 @@
 """Collect -> train -> evaluate from Python: the expert's demos as a LeRobot dataset, LeRobot's ACT trained on them,
 the policy scored on the benchmark's fixed evaluation seeds.
 
-    python demos/collect_train_evaluate.py --episodes 2 --steps 5 --eval-episodes 1 --out outputs/example
+    python demos/collect_train_evaluate.py --episodes 2 --steps 5 --eval-episodes 1 --episode-length 100
 
 That is a smoke run of a minute or two. A policy that sorts takes about 40 demos and 3,000 or more updates
 (``--episodes 40 --steps 3000``: about 40 minutes on 2 CPU cores; docs/baselines.md gives the recipes).
@@ -32,6 +32,8 @@ def main() -> None:
     p.add_argument("--episodes", type=int, default=40, help="expert demos to record")
     p.add_argument("--steps", type=int, default=3000, help="training updates")
     p.add_argument("--eval-episodes", type=int, default=10, help="evaluation episodes on default")
+    p.add_argument("--episode-length", type=int, default=None,
+                   help="evaluation steps before truncation (default: the variant's time limit)")
     p.add_argument("--out", type=Path, default=Path("outputs/example"), help="a new folder for everything")
     args = p.parse_args()
     data, run = args.out / "data", args.out / "train"
@@ -49,7 +51,8 @@ def main() -> None:
     policy = run / "checkpoints" / "last" / "pretrained_model"
     print(f"trained {args.steps} updates: {policy}")
 
-    report = evaluate(str(policy), "default", args.eval_episodes, cameras=(), progress=False)
+    report = evaluate(str(policy), "default", args.eval_episodes, cameras=(), progress=False,
+                      episode_length=args.episode_length)
     print(format_report(report))
 
 

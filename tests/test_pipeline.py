@@ -23,8 +23,8 @@ from colorsort.training.recipes import get_recipe
 
 @pytest.mark.slow
 def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
-    """The state-tracking recipe, tiny: two demo counts of one-box demos on the belt that never stops (each merged
-    with LeRobot's aggregate_datasets), each trained for 2 steps with a checkpoint after each; both checkpoints play
+    """The state-tracking recipe, tiny: two one-box demos on the belt that never stops (merged with LeRobot's
+    aggregate_datasets), trained for 2 steps with a checkpoint after each; both checkpoints play
     the validation seeds (never the evaluation seeds) and the chosen one is scored, one episode per variant; the
     learning curve; the shipped policy, which takes the tracking belt's 24 state inputs. Then the same command again
     reuses every finished stage, and a shorter run is taken from the longer one, bit for bit what lerobot-train
@@ -32,7 +32,7 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     from colorsort.variants import VALIDATION_SEEDS
 
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
-    argv = baseline("--recipe", "state-tracking", "--demos.counts=1,2", "--demos.train_mix=tracking:1",
+    argv = baseline("--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
                     "--demos.boxes_per_episode=1", "--training.steps=2", "--training.small_steps=2",
                     "--training.seeds=1000", "--training.save_every=1", "--training.batch_size=2",
                     "--evaluation.select_episodes=1", "--evaluation.variants=tracking,tracking-fast",
@@ -43,14 +43,14 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
 
     results = json.loads((out / "results.json").read_text())
     assert [(r["demos"], r["variant"], r["seed"], r["steps"], r["checkpoint"]) for r in results["rows"]] == [
-        (1, "tracking", 1000, 2, 2), (2, "tracking", 1000, 2, 2), (2, "tracking-fast", 1000, 2, 2)]
+        (2, "tracking", 1000, 2, 2), (2, "tracking-fast", 1000, 2, 2)]
     assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
     assert [p["step"] for p in results["curve"]] == [1, 2]
     assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
     curve = [p.name for p in (out / "curve").glob("*.json")]  # step 2's point is the full score's
     assert len(curve) == 1 and re.fullmatch(r"demos-2-\w{8}-2steps-\w{8}-seed1000-ens0.2-1-\w{8}\.json", curve[0])
-    chose = sorted(p.name for p in (out / "select").glob("*.json"))  # 2 runs x 2 checkpoints x 1 training variant
-    assert len(chose) == 4 and all("-tracking-" in name for name in chose)
+    chose = sorted(p.name for p in (out / "select").glob("*.json"))  # 2 checkpoints x 1 training variant
+    assert len(chose) == 2 and all("-tracking-" in name for name in chose)
     assert all(json.loads((out / "select" / name).read_text())["seeds"] == [VALIDATION_SEEDS[0]] for name in chose)
     assert re.search(r"scored at 2 after \d+ min \(chosen on validation seeds\)", first.stdout)
     assert "| tracking | ACT, state | 2 | 2 steps" in first.stdout
@@ -78,13 +78,13 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
 
     again = run(argv, tmp_path, timeout=600)
     assert again.returncode == 0, again.stderr[-3000:]
-    assert again.stdout.count("reusing") == 2 + 2 + 4 + 3 + 1 and "lerobot-train" not in again.stdout
+    assert again.stdout.count("reusing") == 1 + 1 + 2 + 2 + 1 and "lerobot-train" not in again.stdout
     assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
 
     # 1 update: the first update of the 2-update runs, taken, not trained, and what lerobot-train makes of 1
     shorter = run([a.replace("steps=2", "steps=1") for a in argv] + ["--until", "train"], tmp_path, timeout=600)
     assert shorter.returncode == 0, shorter.stderr[-3000:]
-    assert shorter.stdout.count("taking the first 1 updates of") == 2 and "lerobot-train" not in shorter.stdout
+    assert shorter.stdout.count("taking the first 1 updates of") == 1 and "lerobot-train" not in shorter.stdout
     fresh = tmp_path / "fresh"
     shutil.copytree(out / "data", fresh / "data")
     trained = run(baseline("--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
@@ -137,28 +137,6 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
     runner.close()
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "scene"]) == 2
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
-
-
-@pytest.mark.slow
-def test_the_diffusion_camera_recipe_runs_in_small(tmp_path):
-    """camera-diffusion, tiny, to its training: lerobot-train's diffusion policy with its GroupNorm ResNet,
-    spatial-softmax keypoints and crops; it reads the images and the arm's state only, and colorsort-eval refuses
-    other cameras (``test_lerobot_cli`` evaluates a diffusion policy the documented command trained)."""
-    out = tmp_path / "diffusion"
-    result = run(baseline("--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=default:1",
-                          "--demos.boxes_per_episode=1", "--training.steps=2", "--training.batch_size=2",
-                          "--workers", "1", "--out", str(out), "--until", "train"), tmp_path, timeout=900)
-    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
-    assert "--policy.type=diffusion" in result.stdout
-    (run_dir,) = (out / "train").glob("demos-1-*-2steps-*-seed1000")
-    model = run_dir / "checkpoints" / "last" / "pretrained_model"
-    config = json.loads((model / "config.json").read_text())
-    assert config["type"] == "diffusion" and set(config["input_features"]) == {
-        "observation.state", "observation.images.sensor", "observation.images.wrist"}
-    assert config["input_features"]["observation.images.sensor"]["shape"] == [3, 64, 64]
-    assert (config["use_group_norm"], config["crop_shape"], config["pretrained_backbone_weights"]) == (
-        True, [58, 58], None)
-    assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--cameras", "sensor"]) == 2
 
 
 def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):

@@ -290,3 +290,24 @@ def test_a_shipped_readme_says_how_the_demos_were_made():
     assert demo_line(get_recipe("state", {"demos.late_pass": LatePass(0), "demos.late_pick": LatePick(5)})) == (
         "8 on default, 8 on jitter, 8 on fast, 16 on distractors; 3 boxes each; every pick held back 0-5 steps")
     assert demo_line(get_recipe("camera-tracking")) == "24 on tracking, 24 on tracking-jitter; 5 boxes each"
+
+
+def test_every_recipes_policy_arguments_are_ones_lerobot_accepts():
+    """Each recipe's ``--policy.*`` arguments parse into LeRobot's own policy configuration (ACT's or diffusion's),
+    whose checks run as lerobot-train's would: the diffusion recipe's GroupNorm, keypoints and crop among them; a
+    misspelt argument is refused. (Training one: ``test_lerobot_cli``'s diffusion test, ``test_pipeline``'s ACT.)"""
+    import draccus
+    from lerobot.policies.act.configuration_act import ACTConfig
+    from lerobot.policies.diffusion.configuration_diffusion import DiffusionConfig
+
+    kinds = {"act": ACTConfig, "diffusion": DiffusionConfig}
+    for recipe in RECIPES.values():
+        args = [a.replace("--policy.", "--", 1) for a in recipe.policy.args(recipe.demos.image_size)
+                if a.startswith("--policy.")]
+        config = draccus.parse(kinds[recipe.policy.type], args=args)
+        assert config.n_action_steps == recipe.policy.n_action_steps, recipe.name
+        if recipe.policy.type == "diffusion":
+            assert (config.use_group_norm, config.crop_shape, config.pretrained_backbone_weights) == (
+                True, (58, 58), None)
+    with pytest.raises(SystemExit):
+        draccus.parse(DiffusionConfig, args=["--crop_shapes=[58,58]"])

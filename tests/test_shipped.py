@@ -13,7 +13,8 @@ from colorsort.cli.eval import main as eval_main
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(SHIPPED))
 def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
-    """README's command for a shipped policy on its main variant's first seed: cameras come from the checkpoint."""
+    """README's command for a shipped policy on its main variant's first seed, 400 steps (20 s) of it: cameras come
+    from the checkpoint, and it places a box."""
     if not SHIPPED[name].is_dir():
         pytest.skip(f"baselines/{name} is not shipped")
     scores_path = SHIPPED[name] / "scores.json"
@@ -21,7 +22,7 @@ def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
     variant = scores.get("recipe", {}).get("main_variant", "default")
     report = tmp_path / "eval.json"
     assert eval_main(["--policy", str(SHIPPED[name]), "--variant", variant, "--episodes", "1",
-                      "--json", str(report)]) == 0
+                      "--episode-length", "400", "--json", str(report)]) == 0
     result = json.loads(report.read_text())
     assert result["correct"] >= 1  # it picks and places: not an untrained policy
 
