@@ -151,6 +151,8 @@ def test_eval_takes_a_checkpoints_cameras_unless_told_and_refuses_others(tmp_pat
     assert observation_settings(vision, None, None) == (("wrist",), (96, 96))
     assert observation_settings("expert", None, None) == (("scene", "wrist"), (128, 128))
     assert observation_settings("expert", "sensor", 64) == (("sensor",), (64, 64))
+    with pytest.raises(ValueError, match="the expert reads the sensor camera"):
+        observation_settings("expert", "none", None)
     with pytest.raises(ValueError, match="trained on cameras"):
         observation_settings(state_only, "scene,wrist", None)
     with pytest.raises(ValueError, match="96x96"):

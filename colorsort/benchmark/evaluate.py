@@ -16,7 +16,7 @@ from colorsort.benchmark.filming import EpisodeFilm
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
-from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
+from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.cell.plant import Grip
 from colorsort.errors import ConfigError, StageError
 from colorsort.executors.base import (
@@ -242,6 +242,9 @@ def observation_settings(policy_spec: str, cameras: str | None,
     check_policy_spec(policy_spec)
     given = parse_cameras(cameras) if cameras is not None else None
     size = (image_size, image_size) if image_size is not None else None
+    if policy_spec == "expert" and given == ():
+        raise ConfigError("the expert reads the sensor camera, which --cameras none leaves unrendered: give "
+                          f"cameras (any of {list(CAMERAS)}), or leave --cameras out")
     if policy_spec in ("expert", "random"):
         return (given if given is not None else DEFAULT_CAMERAS), size or DEFAULT_IMAGE_SIZE
     trained, trained_size = checkpoint_cameras(policy_spec)
