@@ -14,7 +14,7 @@ from colorsort.data.perturbations.base import Hook, Perturbation, Step, perturbe
 from colorsort.data.perturbations.registry import PERTURBATIONS, canonical, parse, register
 
 for _module in pkgutil.iter_modules(__path__):
-    if _module.name not in ("base", "registry"):
+    if _module.name not in ("base", "registry", "holds"):
         importlib.import_module(f"{__name__}.{_module.name}")
 
 __all__ = ["PERTURBATIONS", "Hook", "Perturbation", "Step", "canonical", "parse", "perturbed", "register"]

@@ -18,55 +18,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from colorsort.config import check_range
-from colorsort.data.perturbations.base import Hook, Perturbation, Step
+from colorsort.data.perturbations.base import Hook, Step
+from colorsort.data.perturbations.holds import Holds
 from colorsort.data.perturbations.registry import register
-from colorsort.errors import ConfigError
 from colorsort.expert.base import Expert
 
 # a generator of its own, seeded from the episode's seed: the env's own draws (boxes, lights) are
 # untouched, so an episode recorded with late_pass differs from one without only by the delays
 STREAM = 0x1A7E
-MAX_STEPS = 100  # [control steps] the longest hold asked for (5 s at 20 Hz)
 
 
 @register
 @dataclass(frozen=True)
-class LatePass(Perturbation):
+class LatePass(Holds):
     """Holds back the expert's belt-pass command for 0..``max_steps`` control steps each time it turns on."""
 
-    max_steps: int
-
     name = "late_pass"
-    metavar = "N"
+    tag_prefix = "late"
     help = ("hold each belt pass back 0..N control steps, the stored action staying the expert's: demos that show "
             "a box with no bin waiting at the ray (0: off)")
     order = 20  # around late_pick: a held pick's step still passes through here
-
-    def __post_init__(self) -> None:
-        check_range("late_pass", self.max_steps, 0, MAX_STEPS)
-
-    @classmethod
-    def parse(cls, text: str) -> LatePass:
-        try:
-            return cls(int(text))
-        except ValueError as err:
-            raise ConfigError(f"late_pass={text!r}: give 0 (off) to {MAX_STEPS} control steps") from err
-
-    @property
-    def text(self) -> str:
-        return str(self.max_steps)
-
-    @property
-    def active(self) -> bool:
-        return self.max_steps > 0
-
-    @property
-    def tag(self) -> str:
-        return f"late{self.max_steps}"
-
-    def settings(self) -> int:
-        return self.max_steps
 
     def describe(self) -> str:
         return f"every belt pass held back 0-{self.max_steps} steps"

@@ -19,48 +19,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from colorsort.config import check_range
-from colorsort.data.perturbations.base import Hook, Perturbation, Step
+from colorsort.data.perturbations.base import Hook, Step
+from colorsort.data.perturbations.holds import Holds
 from colorsort.data.perturbations.registry import register
-from colorsort.errors import ConfigError
 from colorsort.expert.base import Expert
 from colorsort.variants import Variant
 
 # a generator of its own, seeded from the episode's seed: the env's own draws and late_pass's are untouched
 STREAM = 0x1A7E_0002
-MAX_STEPS = 100  # [control steps] the longest hold asked for (5 s at 20 Hz)
 
 
 @register
 @dataclass(frozen=True)
-class LatePick(Perturbation):
+class LatePick(Holds):
     """Holds the arm back for 0..``max_steps`` control steps each time the expert starts a pick."""
 
-    max_steps: int
-
     name = "late_pick"
-    metavar = "N"
+    tag_prefix = "pick"
     help = ("hold the arm back 0..N control steps at each pick's start, the stored action the expert's first "
             "approach (stopping belt only; 0: off)")
     order = 10  # next to the expert: it decides whether the expert is asked at all
-
-    def __post_init__(self) -> None:
-        check_range("late_pick", self.max_steps, 0, MAX_STEPS)
-
-    @classmethod
-    def parse(cls, text: str) -> LatePick:
-        try:
-            return cls(int(text))
-        except ValueError as err:
-            raise ConfigError(f"late_pick={text!r}: give 0 (off) to {MAX_STEPS} control steps") from err
-
-    @property
-    def text(self) -> str:
-        return str(self.max_steps)
-
-    @property
-    def active(self) -> bool:
-        return self.max_steps > 0
 
     def applies_to(self, variant: Variant | None, tracking: bool) -> bool:
         return not tracking
@@ -68,13 +46,6 @@ class LatePick(Perturbation):
     def refusal(self, variant: Variant | None) -> str:
         return (f"late_pick={self.max_steps} holds a pick back on a stopped belt; on a tracking belt the box "
                 "would move on: give late_pick=0")
-
-    @property
-    def tag(self) -> str:
-        return f"pick{self.max_steps}"
-
-    def settings(self) -> int:
-        return self.max_steps
 
     def describe(self) -> str:
         return f"every pick held back 0-{self.max_steps} steps"
