@@ -41,10 +41,10 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/mypy
 
-# three pytest workers on the 2-core machines: many tests wait on subprocesses (Ray, lerobot-train, colorsort-eval),
-# and a third worker fills those waits; --dist loadfile keeps each module in one worker, so module fixtures are built
-# once and only one Ray cluster runs at a time
-PYTEST := $(VENV)/bin/python -m pytest -q -n 3 --dist loadfile
+# two pytest workers (the machines have 2 cores; a third, measured, made the suite no faster and loaded the Ray
+# tests' start-up); --dist loadfile keeps each module in one worker, so module fixtures are built once and only one
+# Ray cluster runs at a time
+PYTEST := $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
 
 test: lint
 	$(PYTEST) tests
