@@ -78,6 +78,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
 	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
 	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
+	$(VENV)/bin/python benchmarks/bench_ci.py
 
 # a learned baseline: demos, lerobot-train, colorsort-eval, learning curve (`make baseline RECIPE=camera-tracking`;
 # `colorsort-baseline --list` names the recipes); about 1.5 h a recipe on 2 CPU cores

@@ -27,11 +27,11 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def timed(command: str, cwd: Path) -> tuple[float, int, str]:
-    """(wall time [s], exit status, the output's last lines) of ``command`` run by bash in ``cwd``."""
+    """(wall time [s], exit status, its output) of ``command`` run by bash in ``cwd``."""
     env = {k: v for k, v in os.environ.items() if not k.startswith(("VIRTUAL_ENV", "PYTEST"))}
     started = time.perf_counter()
     done = subprocess.run(["bash", "-c", command], cwd=cwd, env=env, capture_output=True, text=True)
-    return time.perf_counter() - started, done.returncode, (done.stdout + done.stderr)[-4000:]
+    return time.perf_counter() - started, done.returncode, done.stdout + done.stderr
 
 
 def summary(output: str) -> str:

@@ -83,9 +83,13 @@ print(ray.get(ref, timeout=200))
 def test_rays_cancel_during_held_interrupts_stops_the_task_after_the_block(tmp_path):
     """Ray cancels a task with a simulated SIGINT; the task's real SIGINT does nothing, so the held interrupt
     must be delivered by calling the handler (CI caught a cancelled collection that ran to its end)."""
-    # a Ray cluster and a worker that imports colorsort took 90 s to start on 2 loaded cores (3 busy loops beside)
+    # a Ray cluster and a worker that imports colorsort took 90 s to start on 2 loaded cores (3 busy loops beside).
+    # SIGINT as a terminal's process has it: a background job (CI's) starts with SIGINT ignored, which Ray's workers
+    # inherit, and an ignored SIGINT makes Ray's simulated one a no-op (the executor then kills the task: the test
+    # above)
     run = subprocess.run([sys.executable, "-c", CANCEL_DURING_HELD_INTERRUPTS, str(tmp_path / "inside")],
-                         capture_output=True, text=True, timeout=600)
+                         capture_output=True, text=True, timeout=600,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert run.returncode == 0, run.stderr[-3000:]
     assert run.stdout.splitlines()[-1] == "stopped after the block"
 
