@@ -108,6 +108,33 @@ def test_an_interrupt_during_held_interrupts_comes_after_the_block():
         signal.signal(signal.SIGINT, previous)
 
 
+def test_a_simulated_interrupt_during_held_interrupts_comes_after_the_block():
+    """Ray cancels a running task with a simulated SIGINT (the handler is called; no signal is sent, so a re-sent
+    one was lost and a cancelled collection ran to its end, which CI caught): ``_thread.interrupt_main``, from
+    another thread as Ray's core worker does it, lands inside the block and is delivered after it, by calling the
+    handler. (Ray's cancel end to end: ``test_scale``'s stubborn task and Ctrl-C on Ray.)"""
+    import _thread
+    import threading
+
+    from colorsort.executors.base import held_interrupts
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a Ray worker
+    inside, finished = threading.Event(), []
+    canceller = threading.Thread(target=lambda: inside.wait(10) and _thread.interrupt_main())
+    canceller.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with held_interrupts():
+                inside.set()
+                canceller.join(10)  # the simulated SIGINT has been raised while the block runs
+                for _ in range(20):
+                    time.sleep(0.01)  # bytecodes run: an unheld interrupt would land here
+                finished.append(True)
+        assert finished == [True] and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def test_an_interrupt_while_an_episode_saves_keeps_that_episode(reference, monkeypatch, tmp_path):
     """Ray cancels a task with a SIGINT, which can land while LeRobot saves an episode (CI caught a run that
     lost both its shards this way): the save ends first, then the shard stops, every saved episode kept."""
