@@ -18,11 +18,3 @@ def parse_image_size(text: str) -> tuple[int, int]:
         return size[0], size[1]
     raise ConfigError(f"image size {text!r}: give one number (square) or HxW, e.g. 128 or 96x128")
 
-
-def parse_range(text: str) -> tuple[float, float]:
-    """"0.5,0.9" -> (0.5, 0.9): a low and a high bound."""
-    try:
-        low, high = (float(p) for p in text.split(","))
-    except ValueError:
-        raise ConfigError(f"range {text!r}: give two numbers, low,high, e.g. 0.5,0.9") from None
-    return low, high

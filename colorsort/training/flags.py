@@ -17,7 +17,7 @@ import typing
 from dataclasses import fields
 from typing import Any
 
-from colorsort.data.perturbations import PERTURBATIONS, Perturbation
+from colorsort.data.perturbations import PERTURBATIONS
 from colorsort.errors import ConfigError
 from colorsort.training.recipes import SECTIONS, Recipe
 
@@ -110,8 +110,3 @@ def recipe_changes(args: argparse.Namespace, recipe: Recipe) -> dict[str, Any]:
         changes[key] = value
     return changes
 
-
-def flags_of(changes: dict[str, Any]) -> list[str]:
-    """The flags that ask for ``changes``: ``recipe_changes``'s inverse."""
-    return [f"--{key}={value.text if isinstance(value, Perturbation) else show(value)}"
-            for key, value in changes.items()]

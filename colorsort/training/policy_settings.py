@@ -6,7 +6,6 @@ Both kinds answer the same questions, so the pipeline never asks which one it ho
 - ``args(image_size)``: the ``--policy.<name>=<value>`` arguments (and any optimizer ones);
 - ``inference()``: the settings that change how a trained policy acts but not what it learns;
 - ``execution``: how its action chunks are executed, for file names (``chunk10``, ``ens0.01``);
-- ``run_suffix``: what sets its training runs apart in folder names;
 - ``describe(parameters)``: one sentence for a shipped policy's README.
 """
 
@@ -73,13 +72,6 @@ class ActSettings:
     def inference(self) -> dict[str, float | int | None]:
         """The settings that change how a trained ACT acts but not what it learns."""
         return {"n_action_steps": self.n_action_steps, "temporal_ensemble_coeff": self.temporal_ensemble_coeff}
-
-    @property
-    def run_suffix(self) -> str:
-        """What sets a run trained under this schedule or rate apart in folder names: ``-cos``, ``-lr0.0003``
-        (a rate other than 1e-4), both or nothing."""
-        rate = "" if self.optimizer_lr == DEFAULT_LR else f"-lr{self.optimizer_lr:g}"
-        return ("" if self.lr_schedule == "constant" else "-cos") + rate
 
     def args(self, image_size: int) -> list[str]:
         """``lerobot-train``'s arguments for the policy, its optimizer and its learning-rate schedule.
@@ -154,10 +146,6 @@ class DiffusionSettings:
     def inference(self) -> dict[str, float | int | None]:
         """The settings that change how a trained diffusion policy acts but not what it learns."""
         return {"n_action_steps": self.n_action_steps, "num_inference_steps": self.num_inference_steps}
-
-    @property
-    def run_suffix(self) -> str:
-        return "-diffusion"
 
     def crop(self, image_size: int) -> int:
         """The crop's side [px] for square images of ``image_size`` px."""
