@@ -1,7 +1,7 @@
 """Collect -> train -> evaluate from Python: the expert's demos as a LeRobot dataset, LeRobot's ACT trained on them,
 the policy scored on the benchmark's fixed evaluation seeds.
 
-    python demos/collect_train_evaluate.py --episodes 2 --steps 5 --eval-episodes 1 --episode-length 100
+    python demos/collect_train_evaluate.py --episodes 1 --steps 2 --eval-episodes 1 --episode-length 50
 
 That is a smoke run of a minute or two. A policy that sorts takes about 40 demos and 3,000 or more updates
 (``--episodes 40 --steps 3000``: about 40 minutes on 2 CPU cores; docs/baselines.md gives the recipes).

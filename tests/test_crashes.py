@@ -1,28 +1,23 @@
 """Crashes and interrupts: a worker killed outright loses at most its shard, --resume after any crash completes the
 dataset with every episode once, an interrupt never cuts a save short, shards of another run are refused; the
-data the same whatever the shard size."""
+data the same whatever the shard size (the reference is one shard; the runs here shards of 1 or 2 episodes)."""
 
 import json
 import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 
 import pytest
 from scale_common import QUIET, SCALE, by_episode_number, kill_worker_of, same_data
 
+from colorsort.cli.collect import main as collect_main
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
 from colorsort.data.store import MARKER, SHARD_MARKER
 
 pytestmark = pytest.mark.slow  # killed workers, interrupted runs
-
-
-def test_shard_size_does_not_change_the_data(reference, tmp_path):
-    out = tmp_path / "ds"
-    summary = collect(CollectConfig(out=str(out), **{**SCALE, "shard_size": 1}), **QUIET)
-    assert summary.shards == 4 and summary.kept == 4
-    same_data(reference, out)
 
 
 def test_a_local_worker_killed_outright_loses_only_its_shard_and_resume_completes(reference, tmp_path):
@@ -43,11 +38,14 @@ def test_a_local_worker_killed_outright_loses_only_its_shard_and_resume_complete
     same_data(reference, out)
 
 
-def test_resume_after_the_whole_run_was_killed_keeps_its_finished_shards(reference, tmp_path):
+def test_resume_after_the_whole_run_was_killed_keeps_its_finished_shards(reference, tmp_path, capsys):
+    """The collector killed outright mid-run (a process of its own); then, in this process, the same command is
+    refused without --resume and completes with it."""
     out = tmp_path / "ds"
-    command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
-               "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "1", "--workers", "2"]
-    run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    argv = ["--out", str(out), "--episodes", "4", "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "1",
+            "--workers", "2"]
+    run = subprocess.Popen([sys.executable, "-m", "colorsort.cli.collect", *argv], stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL)
     staging = tmp_path / ".ds.staging"
     deadline = time.monotonic() + 300
     while len(list(staging.glob(f"shard-*/{SHARD_MARKER}"))) < 2 and time.monotonic() < deadline:
@@ -57,26 +55,24 @@ def test_resume_after_the_whole_run_was_killed_keeps_its_finished_shards(referen
     finished = len(list(staging.glob(f"shard-*/{SHARD_MARKER}")))
     assert 2 <= finished < 4 and not out.exists()
 
-    again = subprocess.run(command, capture_output=True, text=True)
-    assert again.returncode == 2 and "--resume" in again.stderr  # nothing is discarded silently
-    done = subprocess.run(command + ["--resume"], capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
-    assert f"{finished} kept from the killed run" in done.stdout
+    capsys.readouterr()
+    assert collect_main(argv) == 2 and "--resume" in capsys.readouterr().err  # nothing is discarded silently
+    assert collect_main(argv + ["--resume"]) == 0
+    assert f"{finished} kept from the killed run" in capsys.readouterr().out
     same_data(reference, out)
 
 
 def test_a_worker_file_killed_mid_write_does_not_stop_resume(reference, tmp_path):
+    """Resume past an empty worker file; one-episode shards give the same data as the reference's one shard (the
+    shard size never changes the data)."""
     out = tmp_path / "ds"
-    command = [sys.executable, "-m", "colorsort.cli.collect", "--out", str(out), "--episodes", "4",
-               "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "1", "--workers", "2"]
     staging = tmp_path / ".ds.staging"  # as a run killed between opening and writing a worker file leaves it
     staging.mkdir()
-    settings = CollectConfig(out=str(out), episodes=4, boxes_per_episode=2, cameras=(), shard_size=1,
-                             workers=2).settings()
-    (staging / "run.json").write_text(json.dumps({"run": "killed-run", "settings": settings}))
+    config = CollectConfig(out=str(out), episodes=4, boxes_per_episode=2, cameras=(), shard_size=1, workers=2)
+    (staging / "run.json").write_text(json.dumps({"run": "killed-run", "settings": config.settings()}))
     (staging / "shard-000002.worker.json").write_text("")
-    done = subprocess.run(command + ["--resume"], capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
+    summary = collect(replace(config, resume=True), **QUIET)
+    assert summary.kept == 4 and not summary.errors
     same_data(reference, out)
 
 

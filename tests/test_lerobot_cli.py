@@ -56,11 +56,13 @@ def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProce
 
 @pytest.fixture(scope="module")
 def readme_checkpoint(tmp_path_factory):
-    """The docs' lerobot-train command, 2 steps, on a one-episode dataset recorded with colorsort-collect's defaults."""
+    """The docs' lerobot-train command, 2 steps, on a one-episode dataset recorded with colorsort-collect's defaults
+    (one box: the features are the defaults', the episode shorter)."""
     from colorsort.data.collect import CollectConfig, collect
 
     work = tmp_path_factory.mktemp("readme")
-    collect(CollectConfig(out=str(work / "datasets" / "colorsort"), episodes=1), progress=False, log=lambda _: None)
+    collect(CollectConfig(out=str(work / "datasets" / "colorsort"), episodes=1, boxes_per_episode=1), progress=False,
+            log=lambda _: None)
     argv = replace_flag(replace_flag(documented_command("lerobot-train"), "--steps", "2"), "--batch_size", "2")
     train = run(argv, work, timeout=600)
     assert train.returncode == 0, train.stderr[-3000:]
@@ -75,11 +77,11 @@ def newest_eval_info(work: Path) -> dict:
 
 
 def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint):
-    """Two episodes of 60 steps in LeRobot's default asynchronous vector env, each filmed (the synchronous one,
+    """Two episodes of 30 steps in LeRobot's default asynchronous vector env, each filmed (the synchronous one,
     with the pre-0.6 --env.discover_packages_path, runs in the recorded evaluation's test)."""
     batch_size = 2
     argv = replace_flag(documented_command("lerobot-eval"), "--eval.n_episodes", str(batch_size))
-    argv = replace_flag(argv, "--eval.batch_size", str(batch_size)) + ["--env.episode_length=60"]
+    argv = replace_flag(argv, "--eval.batch_size", str(batch_size)) + ["--env.episode_length=30"]
     done = run(argv, readme_checkpoint, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     summary = newest_eval_info(readme_checkpoint)
@@ -245,11 +247,15 @@ def test_lerobot_dataset_viz_saves_an_rrd_of_a_colorsort_dataset(tiny_dataset, t
     assert {"/observation.images.scene", "/observation.images.wrist", "/action", "/state"} <= paths
 
 
-def test_lerobot_trains_a_diffusion_policy_on_colorsort_that_colorsort_eval_runs(tmp_path):
-    """The docs' diffusion commands (the diffusion extra) in small: 2 demos, 2 updates, one short episode."""
+def test_lerobot_trains_a_diffusion_policy_on_colorsort_that_colorsort_eval_runs(tmp_path, monkeypatch):
+    """The docs' diffusion commands (the diffusion extra) in small: 2 demos, 2 updates, one short episode
+    (ColorSort's own two commands parsed by their own main in this process, LeRobot's in its own)."""
+    from colorsort.cli.collect import main as collect_main
+    from colorsort.cli.eval import main as eval_main
+
+    monkeypatch.chdir(tmp_path)
     collect = replace_flag(documented_command("colorsort-collect", "--cameras none"), "--episodes", "2")
-    done = run(replace_flag(collect, "--boxes-per-episode", "1"), tmp_path, timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
+    assert collect_main(replace_flag(collect, "--boxes-per-episode", "1")[1:]) == 0
     train = replace_flag(documented_command("lerobot-train", "--policy.type=diffusion"), "--steps", "2")
     done = run(replace_flag(train, "--batch_size", "2"), tmp_path, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
@@ -258,8 +264,7 @@ def test_lerobot_trains_a_diffusion_policy_on_colorsort_that_colorsort_eval_runs
     assert config["type"] == "diffusion" and config["down_dims"] == [128, 256]
     assert "observation.environment_state" in config["input_features"]
     evaluate_cmd = documented_command("colorsort-eval", "diffusion-state")
-    done = run(replace_flag(evaluate_cmd, "--episodes", "1") + ["--episode-length", "30", "--json", "eval.json"],
-               tmp_path, timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
+    assert eval_main(replace_flag(evaluate_cmd, "--episodes", "1")[1:] + ["--episode-length", "30", "--json",
+                                                                          "eval.json"]) == 0
     result = json.loads((tmp_path / "eval.json").read_text())
     assert result["episodes"] == 1 and result["per_episode"][0]["steps"] == 30

@@ -10,19 +10,32 @@ from pathlib import Path
 
 import cv2
 import pytest
-from baseline_common import baseline, run
+from baseline_common import run_in_process
 
 from colorsort.cli import baseline as colorsort_baseline
 from colorsort.cli.eval import main as eval_main
 from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
-from colorsort.training import cache
+from colorsort.training import cache, stages
 from colorsort.training.recipes import get_recipe
 
 
+@pytest.fixture
+def in_process(monkeypatch):
+    """colorsort-collect and colorsort-eval stages in this process (lerobot-train stays LeRobot's own process)."""
+    monkeypatch.setattr(stages, "run", run_in_process)
+
+
+def baseline_main(argv: list[str], capsys) -> tuple[int, str]:
+    """``colorsort-baseline argv`` in this process: (exit status, what it printed)."""
+    capsys.readouterr()
+    status = colorsort_baseline.main(argv)
+    return status, capsys.readouterr().out
+
+
 @pytest.mark.slow
-def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
+def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path, in_process, capsys):
     """The state-tracking recipe, tiny: two one-box demos on the belt that never stops (merged with LeRobot's
     aggregate_datasets), trained for 2 steps with a checkpoint after each; both checkpoints play
     the validation seeds (never the evaluation seeds) and the chosen one is scored, one episode per variant; the
@@ -32,14 +45,14 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     from colorsort.variants import VALIDATION_SEEDS
 
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
-    argv = baseline("--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
-                    "--demos.boxes_per_episode=1", "--training.steps=2", "--training.small_steps=2",
-                    "--training.seeds=1000", "--training.save_every=1", "--training.batch_size=2",
-                    "--evaluation.select_episodes=1", "--evaluation.variants=tracking,tracking-fast",
-                    "--evaluation.episodes=1", "--evaluation.other_episodes=1", "--evaluation.curve_episodes=1",
-                    "--evaluation.episode_length=10", "--workers", "1", "--envs", "1", "--out", str(out))
-    first = run(argv + ["--ship", str(ship)], tmp_path, timeout=900)
-    assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
+    argv = ["--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
+            "--demos.boxes_per_episode=1", "--training.steps=2", "--training.small_steps=2",
+            "--training.seeds=1000", "--training.save_every=1", "--training.batch_size=2",
+            "--evaluation.select_episodes=1", "--evaluation.variants=tracking,tracking-fast",
+            "--evaluation.episodes=1", "--evaluation.other_episodes=1", "--evaluation.curve_episodes=1",
+            "--evaluation.episode_length=10", "--workers", "1", "--envs", "1", "--out", str(out)]
+    status, first = baseline_main(argv + ["--ship", str(ship)], capsys)
+    assert status == 0, first[-3000:]
 
     results = json.loads((out / "results.json").read_text())
     assert [(r["demos"], r["variant"], r["seed"], r["steps"], r["checkpoint"]) for r in results["rows"]] == [
@@ -52,9 +65,9 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     chose = sorted(p.name for p in (out / "select").glob("*.json"))  # 2 checkpoints x 1 training variant
     assert len(chose) == 2 and all("-tracking-" in name for name in chose)
     assert all(json.loads((out / "select" / name).read_text())["seeds"] == [VALIDATION_SEEDS[0]] for name in chose)
-    assert re.search(r"scored at 2 after \d+ min \(chosen on validation seeds\)", first.stdout)
-    assert "| tracking | ACT, state | 2 | 2 steps" in first.stdout
-    summary = first.stdout[first.stdout.rindex("| tracking-fast |"):]
+    assert re.search(r"scored at 2 after \d+ min \(chosen on validation seeds\)", first)
+    assert "| tracking | ACT, state | 2 | 2 steps" in first
+    summary = first[first.rindex("| tracking-fast |"):]
     assert summary.startswith("| tracking-fast | ACT, state | 2 | 2 steps")
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -76,23 +89,20 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
     assert json.loads((ship / "config.json").read_text())["input_features"]["observation.state"]["shape"] == [24]
     assert eval_main(["--policy", str(ship), "--variant", "tracking", "--episodes", "1", "--episode-length", "5"]) == 0
 
-    again = run(argv, tmp_path, timeout=600)
-    assert again.returncode == 0, again.stderr[-3000:]
-    assert again.stdout.count("reusing") == 1 + 1 + 2 + 2 + 1 and "lerobot-train" not in again.stdout
-    assert run(argv + ["--ship", str(ship)], tmp_path, timeout=600).returncode == 2  # never replaces a shipped policy
+    status, again = baseline_main(argv, capsys)
+    assert status == 0 and again.count("reusing") == 1 + 1 + 2 + 2 + 1 and "lerobot-train" not in again
+    assert baseline_main(argv + ["--ship", str(ship)], capsys)[0] == 2  # never replaces a shipped policy
 
     # 1 update: the first update of the 2-update runs, taken, not trained, and what lerobot-train makes of 1
-    shorter = run([a.replace("steps=2", "steps=1") for a in argv] + ["--until", "train"], tmp_path, timeout=600)
-    assert shorter.returncode == 0, shorter.stderr[-3000:]
-    assert shorter.stdout.count("taking the first 1 updates of") == 1 and "lerobot-train" not in shorter.stdout
+    status, shorter = baseline_main([a.replace("steps=2", "steps=1") for a in argv] + ["--until", "train"], capsys)
+    assert status == 0 and shorter.count("taking the first 1 updates of") == 1 and "lerobot-train" not in shorter
     fresh = tmp_path / "fresh"
     shutil.copytree(out / "data", fresh / "data")
-    trained = run(baseline("--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
-                           "--demos.boxes_per_episode=1", "--training.steps=1",
-                           "--training.seeds=1000",
-                           "--training.batch_size=2", "--workers", "1", "--out", str(fresh), "--until", "train"),
-                  tmp_path, timeout=600)
-    assert "lerobot-train" in trained.stdout, trained.stdout[-3000:] + trained.stderr[-3000:]
+    status, trained = baseline_main(["--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
+                                     "--demos.boxes_per_episode=1", "--training.steps=1", "--training.seeds=1000",
+                                     "--training.batch_size=2", "--workers", "1", "--out", str(fresh),
+                                     "--until", "train"], capsys)
+    assert status == 0 and "lerobot-train" in trained, trained[-3000:]
     import torch
     from safetensors.torch import load_file
 
@@ -104,17 +114,17 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path):
 
 
 @pytest.mark.slow
-def test_the_camera_recipe_runs_in_small(tmp_path):
+def test_the_camera_recipe_runs_in_small(tmp_path, in_process, capsys):
     """The camera recipe, tiny: the policy takes the images and the arm's state, never the simulator's box state,
     and colorsort-eval renders exactly the cameras it was trained on and refuses others."""
     out = tmp_path / "camera"
-    result = run(baseline("--recipe", "camera", "--demos.image_size=32", "--demos.counts=1",
-                          "--demos.train_mix=default:1", "--demos.boxes_per_episode=1", "--training.steps=2",
-                          "--training.batch_size=2", "--evaluation.variants=default", "--evaluation.episodes=1",
-                          "--evaluation.curve_episodes=1",
-                          "--evaluation.episode_length=5", "--workers", "1", "--envs", "1", "--out", str(out)),
-                 tmp_path, timeout=900)
-    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    status, printed = baseline_main(["--recipe", "camera", "--demos.image_size=32", "--demos.counts=1",
+                                     "--demos.train_mix=default:1", "--demos.boxes_per_episode=1",
+                                     "--training.steps=2", "--training.seeds=1000", "--training.batch_size=2",
+                                     "--evaluation.variants=default", "--evaluation.episodes=1",
+                                     "--evaluation.curve_episodes=1", "--evaluation.episode_length=5",
+                                     "--workers", "1", "--envs", "1", "--out", str(out)], capsys)
+    assert status == 0, printed[-3000:]
     (data,) = (out / "data").glob("demos-1-*")
     info = json.loads((data / "meta" / "info.json").read_text())
     assert {"observation.images.sensor", "observation.images.wrist"} <= set(info["features"])
@@ -126,7 +136,7 @@ def test_the_camera_recipe_runs_in_small(tmp_path):
                                              "observation.images.wrist"}
     assert config["input_features"]["observation.images.wrist"]["shape"] == [3, 32, 32]
     assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 128
-    assert "| default | ACT, sensor+wrist | 1 | 2 steps" in result.stdout
+    assert "| default | ACT, sensor+wrist | 1 | 2 steps" in printed
 
     from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, observation_settings
 
@@ -214,7 +224,7 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
     assert [next(a for a in cmd if a.startswith("--steps=")) for cmd in trained] == ["--steps=2"] * 2 + ["--steps=6"]
 
 
-def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
+def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path, in_process):
     """``boxes_by_variant``: the seed variant's demos hold one box each, in a part of their own, merged; the merged
     set's key comes from its parts, so another mix is another set, never the seed variant's trained on."""
     from colorsort.training.stages import collect, size
@@ -234,7 +244,7 @@ def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path):
     assert other != root and size(root)[0] == size(other)[0] == 1
 
 
-def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_path):
+def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_path, in_process):
     """Each perturbation (``--demos.<name>``) reaches colorsort-collect for the training variants it applies to
     and keys their parts: dim lights for the random-lights variant alone, late picks for both; ``--no-turn`` too.
     One that applies to no training variant (late picks on a tracking belt, dim lights without a lit variant) is
