@@ -6,6 +6,7 @@ import os
 import signal
 import threading
 import time
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -40,9 +41,12 @@ def by_episode_number(root: Path) -> dict[int, dict]:
             for e, n in enumerate(numbers)}
 
 
-def same_episodes(a: Path, b: Path) -> None:
-    """The same episodes, each with the same data, in any order (--resume appends what it records)."""
+def same_episodes(a: Path, b: Path, only: Iterable[int] | None = None) -> None:
+    """The same episodes (``only`` those numbers of ``a``: all of ``b``), each with the same data, in any order
+    (--resume appends what it records)."""
     ea, eb = by_episode_number(a), by_episode_number(b)
+    if only is not None:
+        ea = {n: ea[n] for n in only}
     assert sorted(ea) == sorted(eb)
     for n in ea:
         for key in ea[n]:
