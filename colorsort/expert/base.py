@@ -93,13 +93,16 @@ class Expert:
     else what its motor's torque gives it (``limits.torque_limited_accelerations``).
 
     A subclass sets ``START`` (its first phase) and, where it picks a box that waits for it, ``APPROACH`` (the
-    phase that moves to it), and implements ``handlers``, ``wait_point`` and ``drop_seed``. Use:
-    ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)``, then ``action = expert.act(obs)``
-    every step.
+    phase that moves to it), and implements ``handlers``, ``wait_point`` and ``drop_seed``; one that can take over
+    a cell in any state (``take_over``) also sets ``CLEAR`` (handled by ``_clear``) and ``OVER_BIN``. Use:
+    ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)`` (or ``expert.take_over(obs,
+    env.held_color)`` in the middle of an episode), then ``action = expert.act(obs)`` every step.
     """
 
     START: Enum
     APPROACH: Enum | None = None  # the phase in which the arm moves to a box that waits for it; None: no such phase
+    CLEAR: Enum | None = None  # a take-over's straight lift; None: this expert starts only from its own reset
+    OVER_BIN: Enum | None = None  # the phase that carries a box over a bin and releases it on arrival
 
     def __init__(self, calibration: Calibration, sensor_image: Callable[[dict], np.ndarray],
                  config: ExpertConfig = ExpertConfig()):
@@ -153,6 +156,63 @@ class Expert:
         self.cycles: list[Cycle] = []
         self._q_cmd = np.array(obs["robot0_joint_pos"], float) if obs is not None else self.home.copy()
         self._start_motion(self._q_cmd, self.q_wait, self.config.wait_tolerance)
+
+    def take_over(self, obs: dict, held: str | None = None) -> None:
+        """Go on from any state of the cell, as from a reset: the arm anywhere, the cup sealed to a box or not,
+        boxes anywhere (what a policy left: DAgger's expert labels such states).
+
+        The cup first rises straight up to the carry height, facing down; then a held box goes to the bin of its
+        colour (one with no bin back onto the belt at the sensor, where the next look lets it through) and the arm
+        to the wait pose, and the phases go on from there.
+
+        Args:
+            obs: the observation now.
+            held: the colour of the box sealed to the cup (``ColorSort.held_color``: no sensor of the cell shows
+                it); ignored when the vacuum switch reports no seal.
+
+        Raises:
+            NotImplementedError: this expert starts only from its own reset (``CLEAR`` is None).
+        """
+        if self.CLEAR is None:
+            raise NotImplementedError(f"{type(self).__name__} starts only from its own reset; it cannot take over")
+        self.reset(obs)
+        if held is not None and sealed(obs):
+            self.cycles.append(Cycle(held, self.time, target_bin=held if held in BIN_COLORS else None))
+            self.suction = True
+        self._start_motion(self._q_cmd, self._lifted(self._q_cmd), self.config.lift_tolerance)
+        self._enter(self.CLEAR)
+
+    def _lifted(self, q: np.ndarray) -> np.ndarray:
+        """Joint angles [rad] with the cup straight above where it is now at the carry height, facing down with its
+        yaw kept; ``q`` itself if it is that high already or the arm cannot get there (it then moves on directly)."""
+        position, rotation = self.ik.cup_pose(q)
+        if position[2] >= self.config.carry_z - 0.01:
+            return q
+        waypoint = Waypoint("lift clear", (float(position[0]), float(position[1]), self.config.carry_z),
+                            site_yaw(rotation))
+        try:
+            return self.ik.solve(waypoint, q)
+        except UnreachableWaypoint:
+            return q
+
+    def _clear(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
+        """``CLEAR``: once up, a held box goes over its bin (or back to the belt), else the arm to the wait pose."""
+        if not self._arrived(q):
+            return
+        cycle = self.cycles[-1] if self.seen_color is not None else None
+        if cycle is None:
+            self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
+            self._enter(self.START)
+            return
+        assert self.OVER_BIN is not None, "an expert that takes over names its phase over the bin"
+        if cycle.target_bin is not None:
+            self._start_motion(goal, self._next_drop(cycle.target_bin), self.config.drop_tolerance)
+        else:
+            px, py, _ = self.layout.pick_point
+            top = self.layout.belt_top_z + 2 * self.layout.box_size + self.config.approach_gap  # the box 4 cm up
+            q_belt = self.ik.solve(Waypoint("back onto the belt", (px, py, top), self.cup_yaw), self.q_wait)
+            self._start_motion(goal, q_belt, self.config.drop_tolerance)
+        self._enter(self.OVER_BIN)
 
     @property
     def seen_color(self) -> str | None:

@@ -18,6 +18,9 @@ Phases (the original's numbering):
 6. ``MOVE_OVER_BIN``: to the next drop slot over the bin of the colour seen;
 7. ``RELEASE``: suction off until the seal is gone and the box has fallen clear;
 8. emptying full bins is the cell's own job here: ``ColorSort`` empties a bin when it is full.
+
+``CLEAR`` starts a take-over from any state of the cell (``Expert.take_over``): straight up, then on to the bin of
+a held box's colour (``MOVE_OVER_BIN``) or to the wait pose.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ class Phase(Enum):
     BACK_UP = "back up"
     MOVE_OVER_BIN = "move over bin"
     RELEASE = "release"
+    CLEAR = "lift clear"  # a take-over's first motion (``Expert.take_over``)
 
 
 @dataclass(frozen=True)
@@ -64,13 +68,15 @@ class SortingExpert(Expert):
 
     START = Phase.MOVE_TO_WAIT
     APPROACH = Phase.APPROACH
+    CLEAR = Phase.CLEAR
+    OVER_BIN = Phase.MOVE_OVER_BIN
 
     def handlers(self) -> dict[Enum, Handler]:
         return {
             Phase.MOVE_TO_WAIT: self._move_to_wait, Phase.WAIT_FOR_BOX: self._wait_for_box,
             Phase.LET_THROUGH: self._let_through, Phase.APPROACH: self._approach, Phase.DESCEND: self._descend,
             Phase.GRIP: self._grip, Phase.BACK_UP: self._back_up, Phase.MOVE_OVER_BIN: self._move_over_bin,
-            Phase.RELEASE: self._release,
+            Phase.RELEASE: self._release, Phase.CLEAR: self._clear,
         }
 
     def drop_seed(self) -> np.ndarray:

@@ -1,0 +1,92 @@
+"""The expert takes over a cell in a state it did not make (DAgger's expert labels the states a policy reaches): the
+arm somewhere else, a box dropped back on the belt, a box carried over the wrong bin; each time every box ends in the
+bin of its colour."""
+
+import numpy as np
+import pytest
+from helpers import move_to
+from test_expert import assert_all_in_their_bins, make_expert_env, run_until
+
+from colorsort.expert.factory import make_expert
+from colorsort.expert.sorter import Phase
+
+
+def expert_until(env, expert, obs, done, max_time: float = 20.0):
+    """Step the expert until ``done(expert, obs)``; the last observation."""
+    while not done(expert, obs):
+        assert env.cur_time < max_time, f"the expert never reached that state (phase {expert.phase})"
+        obs, _, _, _ = env.step(expert.act(obs))
+    return obs
+
+
+def hold(env, obs, suction: float, seconds: float):
+    """A policy that holds the arm where it is for ``seconds`` [s], the cup's suction as given."""
+    q = np.asarray(obs["robot0_joint_pos"], float)
+    for _ in range(int(round(seconds * env.control_freq))):
+        obs, _, _, _ = env.step(np.concatenate([q, [suction, -1.0]]))
+    return obs
+
+
+def test_from_an_arm_pose_of_its_own_it_sorts_every_box(make_env):
+    """A policy moved the arm to a pose the expert never takes (low over the belt's far side, wrist turned) while
+    the first box rode to the sensor; the expert takes over and sorts all three."""
+    env, expert, obs = make_expert_env(make_env)
+    pose = expert.home + np.array([0.5, 0.35, 0.1, 0.8, -0.4, 1.2])
+    obs, _ = move_to(env, pose, suction=-1.0, duration=1.5, settle=0.5)
+    assert not env.suction_sealed
+    expert.take_over(obs, env.held_color)
+    assert expert.phase is Phase.CLEAR
+    run_until(env, expert, obs, boxes=3, max_time=30.0)
+    assert_all_in_their_bins(env, 3)
+
+
+def test_a_box_dropped_back_on_the_belt_is_picked_again(make_env):
+    """The cup lets go of its box 2 cm over the belt just after the seal; the box falls back at the sensor, and
+    the expert, taking over with nothing held, looks at it again, picks it and sorts every box."""
+    env, expert, obs = make_expert_env(make_env)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.BACK_UP)
+    cup_z = float(obs["robot0_eef_pos"][2])
+    obs = expert_until(env, expert, obs, lambda _, o: float(o["robot0_eef_pos"][2]) > cup_z + 0.02)
+    obs = hold(env, obs, suction=-1.0, seconds=1.0)
+    assert not env.suction_sealed and env.held_color is None and env.box_detected  # back at the sensor
+    expert.take_over(obs, env.held_color)
+    run_until(env, expert, obs, boxes=3, max_time=35.0)
+    assert_all_in_their_bins(env, 3)
+    assert len(env.grips) == 4  # the dropped box was gripped twice
+
+
+def test_a_box_carried_over_the_wrong_bin_goes_to_the_bin_of_its_colour(make_env):
+    """A policy carried the sealed box over another colour's bin; told what it holds, the expert takes it on to
+    its own bin and sorts the rest."""
+    env, expert, obs = make_expert_env(make_env)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.MOVE_OVER_BIN)
+    color = env.held_color
+    wrong = next(c for c in expert.q_drop if c != color)
+    obs, _ = move_to(env, expert.q_drop[wrong][0], suction=1.0, duration=1.5, settle=0.3)
+    assert env.suction_sealed and env.held_color == color and not env.events  # still held, over the wrong bin
+    expert.take_over(obs, env.held_color)
+    assert expert.seen_color == color and expert.suction
+    run_until(env, expert, obs, boxes=3, max_time=35.0)
+    assert_all_in_their_bins(env, 3)
+
+
+def test_the_tracking_expert_says_it_cannot_take_over_yet(make_env):
+    env = make_env(has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor"], tracking=True)
+    obs = env.reset()
+    with pytest.raises(NotImplementedError, match="cannot take over"):
+        make_expert(env).take_over(obs)
+
+
+def test_a_held_box_of_no_bin_colour_goes_back_onto_the_belt_at_the_sensor(make_env):
+    """Told that the held box has no bin (a distractor a policy picked), the expert sets it back on the belt at the
+    sensor to be looked at again: here the box is in fact red, so the next look sends it to the red bin."""
+    env, expert, obs = make_expert_env(make_env)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.MOVE_OVER_BIN)
+    color = env.held_color
+    expert.take_over(obs, "yellow")
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.RELEASE)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is not Phase.RELEASE)  # let go of it
+    assert env.box_detected and not env.suction_sealed and not env.events  # on the belt at the ray, in no bin
+    run_until(env, expert, obs, boxes=3, max_time=35.0)
+    assert_all_in_their_bins(env, 3)
+    assert env.events[0].color == color and len(env.grips) == 4
