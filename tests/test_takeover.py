@@ -3,12 +3,13 @@ arm somewhere else, a box dropped back on the belt, a box carried over the wrong
 bin of its colour."""
 
 import numpy as np
-import pytest
 from helpers import move_to
 from test_expert import assert_all_in_their_bins, make_expert_env, run_until
 
+from colorsort.cell.privileged import TakeOver, take_over_view
 from colorsort.expert.factory import make_expert
 from colorsort.expert.sorter import Phase
+from colorsort.expert.tracking import Phase as TrackingPhase
 
 
 def expert_until(env, expert, obs, done, max_time: float = 20.0):
@@ -34,7 +35,7 @@ def test_from_an_arm_pose_of_its_own_it_sorts_every_box(make_env):
     pose = expert.home + np.array([0.5, 0.35, 0.1, 0.8, -0.4, 1.2])
     obs, _ = move_to(env, pose, suction=-1.0, duration=1.5, settle=0.5)
     assert not env.suction_sealed
-    expert.take_over(obs, env.held_color)
+    expert.take_over(obs, take_over_view(env))
     assert expert.phase is Phase.CLEAR
     run_until(env, expert, obs, boxes=3, max_time=30.0)
     assert_all_in_their_bins(env, 3)
@@ -48,8 +49,8 @@ def test_a_box_dropped_back_on_the_belt_is_picked_again(make_env):
     cup_z = float(obs["robot0_eef_pos"][2])
     obs = expert_until(env, expert, obs, lambda _, o: float(o["robot0_eef_pos"][2]) > cup_z + 0.02)
     obs = hold(env, obs, suction=-1.0, seconds=1.0)
-    assert not env.suction_sealed and env.held_color is None and env.box_detected  # back at the sensor
-    expert.take_over(obs, env.held_color)
+    assert not env.suction_sealed and env.box_detected  # back at the sensor
+    expert.take_over(obs, take_over_view(env))
     run_until(env, expert, obs, boxes=3, max_time=35.0)
     assert_all_in_their_bins(env, 3)
     assert len(env.grips) == 4  # the dropped box was gripped twice
@@ -60,21 +61,14 @@ def test_a_box_carried_over_the_wrong_bin_goes_to_the_bin_of_its_colour(make_env
     its own bin and sorts the rest."""
     env, expert, obs = make_expert_env(make_env)
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.MOVE_OVER_BIN)
-    color = env.held_color
+    color = take_over_view(env).held
     wrong = next(c for c in expert.q_drop if c != color)
     obs, _ = move_to(env, expert.q_drop[wrong][0], suction=1.0, duration=1.5, settle=0.3)
-    assert env.suction_sealed and env.held_color == color and not env.events  # still held, over the wrong bin
-    expert.take_over(obs, env.held_color)
+    assert env.suction_sealed and take_over_view(env).held == color and not env.events  # over the wrong bin
+    expert.take_over(obs, take_over_view(env))
     assert expert.seen_color == color and expert.suction
     run_until(env, expert, obs, boxes=3, max_time=35.0)
     assert_all_in_their_bins(env, 3)
-
-
-def test_the_tracking_expert_says_it_cannot_take_over_yet(make_env):
-    env = make_env(has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor"], tracking=True)
-    obs = env.reset()
-    with pytest.raises(NotImplementedError, match="cannot take over"):
-        make_expert(env).take_over(obs)
 
 
 def test_a_held_box_of_no_bin_colour_goes_back_onto_the_belt_at_the_sensor(make_env):
@@ -82,11 +76,50 @@ def test_a_held_box_of_no_bin_colour_goes_back_onto_the_belt_at_the_sensor(make_
     sensor to be looked at again: here the box is in fact red, so the next look sends it to the red bin."""
     env, expert, obs = make_expert_env(make_env)
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.MOVE_OVER_BIN)
-    color = env.held_color
-    expert.take_over(obs, "yellow")
+    color = take_over_view(env).held
+    expert.take_over(obs, TakeOver("yellow", ()))
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.RELEASE)
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is not Phase.RELEASE)  # let go of it
     assert env.box_detected and not env.suction_sealed and not env.events  # on the belt at the ray, in no bin
     run_until(env, expert, obs, boxes=3, max_time=35.0)
     assert_all_in_their_bins(env, 3)
     assert env.events[0].color == color and len(env.grips) == 4
+
+
+def tracking_env(make_env):
+    return make_env(preset="tracking", has_offscreen_renderer=True, use_camera_obs=False, ignore_done=True)
+
+
+def test_on_a_moving_belt_it_meets_the_boxes_that_passed_the_ray_before_it_took_over(make_env):
+    """A policy held the arm off to the side while the first box passed the ray, unseen by the expert; taking
+    over, the expert is told where that box lies (the simulator's pose, as its photo would have said) and meets it
+    on the move, then every box after it: none dropped, none in a wrong bin."""
+    env = tracking_env(make_env)
+    obs = env.reset(seed=1)
+    expert = make_expert(env)
+    aside = expert.home + np.array([-0.6, 0.2, 0.0, 0.0, 0.3, 0.0])
+    obs, _ = move_to(env, aside, suction=-1.0, duration=1.0, settle=0.0)
+    while not take_over_view(env).past_the_ray:
+        obs, _ = move_to(env, aside, suction=-1.0, duration=0.05, settle=0.0)
+    view = take_over_view(env)
+    assert len(view.past_the_ray) == 1 and not env.events
+    expert.take_over(obs, view)
+    assert [s.cycle.seen_color for s in expert.queue] == [view.past_the_ray[0].color]
+    run_until(env, expert, obs, boxes=3, max_time=30.0)
+    assert_all_in_their_bins(env, 3)
+    assert expert.let_go == 0
+
+
+def test_on_a_moving_belt_a_box_carried_over_the_wrong_bin_goes_to_its_own(make_env):
+    env = tracking_env(make_env)
+    obs = env.reset(seed=1)
+    expert = make_expert(env)
+    expert.reset(obs)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is TrackingPhase.MOVE_OVER_BIN)
+    color = take_over_view(env).held
+    wrong = next(c for c in expert.q_drop if c != color)
+    obs, _ = move_to(env, expert.q_drop[wrong][0], suction=1.0, duration=1.0, settle=0.2)
+    assert env.suction_sealed and not env.events
+    expert.take_over(obs, take_over_view(env))
+    run_until(env, expert, obs, boxes=3, max_time=30.0)
+    assert_all_in_their_bins(env, 3)

@@ -200,13 +200,6 @@ class ColorSort(ManipulationEnv):
         return self.plant.seal.held is not None
 
     @property
-    def held_color(self) -> str | None:
-        """The colour of the box sealed to the cup, or None: what an expert taking over a cell it did not run
-        (``Expert.take_over``) is told, since no sensor of the cell shows it (privileged state)."""
-        held = self.plant.seal.held
-        return None if held is None else self.plant.pool.boxes[held].color
-
-    @property
     def events(self) -> list[BoxEvent]:
         """Every box that left play this episode, in order (``referee.BoxEvent``)."""
         return self.plant.referee.events

@@ -15,6 +15,7 @@ from enum import Enum
 
 import numpy as np
 
+from colorsort.cell.privileged import NOTHING_HELD, TakeOver
 from colorsort.config import BIN_COLORS
 from colorsort.expert.calibration import Calibration
 from colorsort.expert.config import ExpertConfig
@@ -95,8 +96,8 @@ class Expert:
     A subclass sets ``START`` (its first phase) and, where it picks a box that waits for it, ``APPROACH`` (the
     phase that moves to it), and implements ``handlers``, ``wait_point`` and ``drop_seed``; one that can take over
     a cell in any state (``take_over``) also sets ``CLEAR`` (handled by ``_clear``) and ``OVER_BIN``. Use:
-    ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)`` (or ``expert.take_over(obs,
-    env.held_color)`` in the middle of an episode), then ``action = expert.act(obs)`` every step.
+    ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)`` (or, in the middle of an episode,
+    ``expert.take_over(obs, take_over_view(env))``), then ``action = expert.act(obs)`` every step.
     """
 
     START: Enum
@@ -154,21 +155,22 @@ class Expert:
         self.belt_pass = False
         self.drops = {c: 0 for c in BIN_COLORS}
         self.cycles: list[Cycle] = []
+        self.carrying: Cycle | None = None  # a take-over's held box, until the lift ends
         self._q_cmd = np.array(obs["robot0_joint_pos"], float) if obs is not None else self.home.copy()
         self._start_motion(self._q_cmd, self.q_wait, self.config.wait_tolerance)
 
-    def take_over(self, obs: dict, held: str | None = None) -> None:
+    def take_over(self, obs: dict, view: TakeOver = NOTHING_HELD) -> None:
         """Go on from any state of the cell, as from a reset: the arm anywhere, the cup sealed to a box or not,
         boxes anywhere (what a policy left: DAgger's expert labels such states).
 
-        The cup first rises straight up to the carry height, facing down; then a held box goes to the bin of its
-        colour (one with no bin back onto the belt at the sensor, where the next look lets it through) and the arm
-        to the wait pose, and the phases go on from there.
+        The cup first rises straight up to the carry height, facing down (``CLEAR``); then a held box goes to the
+        bin of its colour (one with no bin back onto the belt at the sensor, where the next look lets it through)
+        and the arm to the wait pose, and the phases go on from there.
 
         Args:
             obs: the observation now.
-            held: the colour of the box sealed to the cup (``ColorSort.held_color``: no sensor of the cell shows
-                it); ignored when the vacuum switch reports no seal.
+            view: what no sensor of the cell shows (``cell.privileged.take_over_view(env)``): the held box's
+                colour (ignored when the vacuum switch reports no seal) and the boxes past the ray.
 
         Raises:
             NotImplementedError: this expert starts only from its own reset (``CLEAR`` is None).
@@ -176,8 +178,9 @@ class Expert:
         if self.CLEAR is None:
             raise NotImplementedError(f"{type(self).__name__} starts only from its own reset; it cannot take over")
         self.reset(obs)
-        if held is not None and sealed(obs):
-            self.cycles.append(Cycle(held, self.time, target_bin=held if held in BIN_COLORS else None))
+        if view.held is not None and sealed(obs):
+            self.carrying = Cycle(view.held, self.time, target_bin=view.held if view.held in BIN_COLORS else None)
+            self.cycles.append(self.carrying)
             self.suction = True
         self._start_motion(self._q_cmd, self._lifted(self._q_cmd), self.config.lift_tolerance)
         self._enter(self.CLEAR)
@@ -199,7 +202,7 @@ class Expert:
         """``CLEAR``: once up, a held box goes over its bin (or back to the belt), else the arm to the wait pose."""
         if not self._arrived(q):
             return
-        cycle = self.cycles[-1] if self.seen_color is not None else None
+        cycle, self.carrying = self.carrying, None
         if cycle is None:
             self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
             self._enter(self.START)

@@ -25,7 +25,8 @@ from functools import cached_property
 
 import numpy as np
 
-from colorsort.config import CellLayout
+from colorsort.cell.privileged import NOTHING_HELD, TakeOver
+from colorsort.config import BIN_COLORS, CellLayout
 from colorsort.expert.base import Cycle, Expert, Handler, ray_blocked, sealed
 from colorsort.expert.config import ExpertConfig
 from colorsort.expert.planning import JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
@@ -40,6 +41,7 @@ class Phase(Enum):
     TRACK = "track box"  # down onto the moving box, seal and lift, moving with it
     MOVE_OVER_BIN = "move over bin"
     RELEASE = "release"
+    CLEAR = "lift clear"  # a take-over's first motion (``Expert.take_over``)
 
 
 @dataclass
@@ -122,11 +124,30 @@ class TrackingExpert(Expert):
     """
 
     START = Phase.MOVE_TO_WAIT
+    CLEAR = Phase.CLEAR
+    OVER_BIN = Phase.MOVE_OVER_BIN
+    current: Sighting | None  # the box being picked (or, after a take-over, carried)
 
     def handlers(self) -> dict[Enum, Handler]:
         return {Phase.MOVE_TO_WAIT: self._move_to_wait, Phase.WAIT_FOR_BOX: self._wait_for_box,
                 Phase.INTERCEPT: self._intercept, Phase.TRACK: self._track,
-                Phase.MOVE_OVER_BIN: self._move_over_bin, Phase.RELEASE: self._release}
+                Phase.MOVE_OVER_BIN: self._move_over_bin, Phase.RELEASE: self._release, Phase.CLEAR: self._clear}
+
+    def take_over(self, obs: dict, view: TakeOver = NOTHING_HELD) -> None:
+        """``Expert.take_over``; the boxes past the ray, which it would have known from its photos, join the queue
+        as if seen now (their pose from ``view``), to be met where they still can be."""
+        super().take_over(obs, view)
+        travel = float(np.asarray(obs["belt_travel"]).ravel()[0])
+        if self.carrying is not None:  # no box to meet: the held one goes to its bin after the lift
+            self.current = Sighting(self.carrying, float("nan"), float("nan"), self.cup_yaw, travel)
+        for box in view.past_the_ray:
+            cycle = Cycle(box.color, self.time, target_bin=box.color if box.color in BIN_COLORS else None)
+            self.cycles.append(cycle)
+            if cycle.target_bin is None:
+                cycle.done_at = self.time  # it rides on, as any box without a bin
+                continue
+            turn = (box.yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4 if self.config.turn_to_box else 0.0
+            self.queue.append(Sighting(cycle, box.x, box.y, self.cup_yaw + turn, travel))
 
     def drop_seed(self) -> np.ndarray:
         """Home: from the wait pose over the far end of the belt, IK for the far bins lands in other branches."""
