@@ -3,6 +3,7 @@ arm somewhere else, a box dropped back on the belt, a box carried over the wrong
 bin of its colour."""
 
 import numpy as np
+import pytest
 from helpers import move_to
 from test_expert import assert_all_in_their_bins, make_expert_env, run_until
 
@@ -123,3 +124,36 @@ def test_on_a_moving_belt_a_box_carried_over_the_wrong_bin_goes_to_its_own(make_
     expert.take_over(obs, take_over_view(env))
     run_until(env, expert, obs, boxes=3, max_time=30.0)
     assert_all_in_their_bins(env, 3)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("policy_steps, sealed", [(95, False), (115, True)])
+def test_it_takes_over_from_a_shipped_policy_in_the_middle_of_an_episode(policy_steps, sealed):
+    """The shipped camera policy acts for 4.75 s (its cup coming down onto the first box, not yet sealed) or
+    5.75 s (carrying that box, sealed); the expert takes over from the state the policy left and the episode is a
+    success: every box in the bin of its colour."""
+    from baseline_common import SHIPPED
+
+    from colorsort.benchmark.gym_env import ColorSortGymEnv
+    from colorsort.benchmark.policies import LeRobotPolicy, checkpoint_cameras
+
+    cameras, size = checkpoint_cameras(SHIPPED["act-camera"])
+    assert size is not None and "sensor" in cameras  # the expert looks through the policy's own sensor camera
+    env = ColorSortGymEnv("default", cameras=cameras, image_size=size)
+    try:
+        policy = LeRobotPolicy(SHIPPED["act-camera"])
+        obs, _ = env.reset(seed=10000)
+        policy.reset(env, 10000)
+        for _ in range(policy_steps):
+            obs, _, terminated, _, info = env.step(policy.act(obs))
+            assert not terminated
+        assert env.env.suction_sealed is sealed and not env.env.events
+        expert = make_expert(env.env)
+        expert.take_over(env.raw_obs, take_over_view(env.env))
+        terminated = truncated = False
+        while not (terminated or truncated):
+            _, _, terminated, truncated, info = env.step(expert.act(env.raw_obs).astype(np.float32))
+        assert info["is_success"], info
+        assert_all_in_their_bins(env.env, env.variant.boxes)
+    finally:
+        env.close()
