@@ -21,14 +21,6 @@ def expert_until(env, expert, obs, done, max_time: float = 20.0):
     return obs
 
 
-def hold(env, obs, suction: float, seconds: float):
-    """A policy that holds the arm where it is for ``seconds`` [s], the cup's suction as given."""
-    q = np.asarray(obs["robot0_joint_pos"], float)
-    for _ in range(int(round(seconds * env.control_freq))):
-        obs, _, _, _ = env.step(np.concatenate([q, [suction, -1.0]]))
-    return obs
-
-
 def test_from_an_arm_pose_of_its_own_it_sorts_every_box(make_env):
     """A policy moved the arm to a pose the expert never takes (low over the belt's far side, wrist turned) while
     the first box rode to the sensor; the expert takes over and sorts all three."""
@@ -49,7 +41,7 @@ def test_a_box_dropped_back_on_the_belt_is_picked_again(make_env):
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.BACK_UP)
     cup_z = float(obs["robot0_eef_pos"][2])
     obs = expert_until(env, expert, obs, lambda _, o: float(o["robot0_eef_pos"][2]) > cup_z + 0.02)
-    obs = hold(env, obs, suction=-1.0, seconds=1.0)
+    obs, _ = move_to(env, obs["robot0_joint_pos"], suction=-1.0, duration=0.05, settle=1.0)  # let go, held still
     assert not env.suction_sealed and env.box_detected  # back at the sensor
     expert.take_over(obs, take_over_view(env))
     run_until(env, expert, obs, boxes=3, max_time=35.0)

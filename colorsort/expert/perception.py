@@ -136,6 +136,11 @@ class Detection:
     area: int
 
 
+def wrap_quarter_turn(angle: float) -> float:
+    """``angle`` [rad] mapped into [-pi/4, pi/4): the yaw of a cube, which repeats every quarter turn."""
+    return float((angle + np.pi / 4) % (np.pi / 2) - np.pi / 4)
+
+
 def bin_for(t: Detection | None) -> str | None:
     """The bin a sighted box goes to: its colour when it was seen whole and its colour has a bin; else None
     (no box seen, a box partly in view, a colour with no bin): the box is let through."""
@@ -274,7 +279,7 @@ class ColorSensor:
         angle = np.arctan2(tangent[:, 1], tangent[:, 0])
         weight = np.linalg.norm(tangent, axis=1)
         yaw = float(np.arctan2((weight * np.sin(4 * angle)).sum(), (weight * np.cos(4 * angle)).sum()) / 4)
-        yaw = (yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4
+        yaw = wrap_quarter_turn(yaw)
         center = cam.pixel_to_plane(np.array(rect[0]) + shift, self.top_z)[0]
         rows, cols = np.nonzero(part)
         rows, cols = rows + offset[1], cols + offset[0]

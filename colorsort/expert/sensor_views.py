@@ -15,7 +15,7 @@ from colorsort.cell.env import ColorSort
 from colorsort.cell.lighting import LightRig, sensor_effects
 from colorsort.config import Lighting
 from colorsort.errors import ConfigError
-from colorsort.expert.perception import CameraModel
+from colorsort.expert.perception import CameraModel, wrap_quarter_turn
 
 LAYOUTS: tuple[str, ...] = ("single", "partial", "two_boxes")
 
@@ -37,11 +37,6 @@ class View:
     center: np.ndarray
     yaw: float
     complete: bool
-
-
-def wrap_quarter_turn(angle: float) -> float:
-    """``angle`` [rad] mapped into [-pi/4, pi/4): the yaw of a cube, which repeats every quarter turn."""
-    return float((angle + np.pi / 4) % (np.pi / 2) - np.pi / 4)
 
 
 class ViewSampler:

@@ -29,6 +29,7 @@ from colorsort.cell.privileged import NOTHING_HELD, TakeOver
 from colorsort.config import BIN_COLORS, CellLayout
 from colorsort.expert.base import Cycle, Expert, Handler, ray_blocked, sealed
 from colorsort.expert.config import ExpertConfig
+from colorsort.expert.perception import wrap_quarter_turn
 from colorsort.expert.planning import JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
 
 
@@ -146,7 +147,7 @@ class TrackingExpert(Expert):
             if cycle.target_bin is None:
                 cycle.done_at = self.time  # it rides on, as any box without a bin
                 continue
-            turn = (box.yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4 if self.config.turn_to_box else 0.0
+            turn = wrap_quarter_turn(box.yaw) if self.config.turn_to_box else 0.0
             self.queue.append(Sighting(cycle, box.x, box.y, self.cup_yaw + turn, travel))
 
     def drop_seed(self) -> np.ndarray:
