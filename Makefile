@@ -46,8 +46,8 @@ lint: $(STAMP)
 
 # two pytest workers (the machines have 2 cores; a third, measured, made the suite no faster and loaded the Ray
 # tests' start-up); --dist loadfile keeps each module in one worker, so module fixtures are built once and only one
-# Ray cluster runs at a time
-PYTEST := $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile
+# Ray cluster runs at a time; --no-loadscope-reorder: the longest modules first (tests/conftest.py's LONGEST_FIRST)
+PYTEST := $(VENV)/bin/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder
 
 test: lint
 	$(PYTEST) tests

@@ -7,7 +7,9 @@ That is a smoke run of a minute or two. A policy that sorts takes about 40 demos
 (``--episodes 40 --steps 3000``: about 40 minutes on 2 CPU cores; docs/baselines.md gives the recipes).
 Each stage is the library call a script of your own would make: ``colorsort.data.collect.collect``,
 LeRobot's ``lerobot-train`` (its documented command line, run as a subprocess: LeRobot trains that way), and
-``colorsort.benchmark.evaluate.evaluate``. Nothing is downloaded (``HF_HUB_OFFLINE=1``).
+``colorsort.benchmark.evaluate.evaluate``. Nothing is downloaded (``HF_HUB_OFFLINE=1``). The demos are state only,
+so lerobot-train loads them in its own process (``--num_workers=0``): LeRobot spawns each loader process, about 15 s
+of imports before the first batch.
 """
 
 from __future__ import annotations
@@ -46,7 +48,7 @@ def main() -> None:
                     f"--dataset.root={data}", "--policy.type=act", "--policy.device=cpu", "--policy.push_to_hub=false",
                     "--policy.dim_model=128", "--policy.dim_feedforward=512", "--policy.n_encoder_layers=2",
                     "--policy.n_decoder_layers=1", "--policy.use_vae=false", "--policy.optimizer_lr=1e-4",
-                    f"--steps={args.steps}", f"--save_freq={args.steps}", "--batch_size=16", "--num_workers=1",
+                    f"--steps={args.steps}", f"--save_freq={args.steps}", "--batch_size=16", "--num_workers=0",
                     "--wandb.enable=false", f"--output_dir={run}"], check=True)
     policy = run / "checkpoints" / "last" / "pretrained_model"
     print(f"trained {args.steps} updates: {policy}")

@@ -12,6 +12,19 @@ from scale_common import QUIET, SCALE  # noqa: E402
 
 import colorsort  # noqa: E402,F401  (registers the task)
 
+# The modules that take longest (each one's summed test time in a full `make test`, from pytest's --junitxml), run
+# first: each stays on one worker (--dist loadfile), and a long one started last kept the other worker idle for
+# minutes at the end. The Makefile's --no-loadscope-reorder keeps this order (xdist's own puts the modules with the
+# most tests first).
+LONGEST_FIRST = ("test_scale", "test_lerobot_cli", "test_benchmark", "test_shipped", "test_collect", "test_pipeline",
+                 "test_crashes", "test_demos", "test_clients", "test_expert", "test_tracking", "test_report",
+                 "test_takeover")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.stem, len(rank)))  # stable: each module's own order kept
+
 
 @pytest.fixture
 def closing():
@@ -63,16 +76,4 @@ def reference(tmp_path_factory):
     root = tmp_path_factory.mktemp("scale") / "reference"
     summary = collect(CollectConfig(out=str(root), **{**SCALE, "shard_size": 32}), **QUIET)
     assert summary.kept == 4 and summary.shards == 1
-    return root
-
-
-@pytest.fixture(scope="module")
-def long_reference(tmp_path_factory):
-    """As ``reference`` with 8 episodes: an interrupt after a shard's first episode leaves it 3 to go."""
-    from colorsort.data.collect import collect
-    from colorsort.data.config import CollectConfig
-
-    root = tmp_path_factory.mktemp("scale") / "long-reference"
-    summary = collect(CollectConfig(out=str(root), **{**SCALE, "episodes": 8, "shard_size": 32}), **QUIET)
-    assert summary.kept == 8 and summary.shards == 1
     return root

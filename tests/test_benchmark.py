@@ -51,6 +51,7 @@ def test_expert_sorts_every_box_on_default():
     assert 9.0 < report.boxes_per_minute < 15.0  # a box every 4 s, the first one rides 4 s to the sensor
 
 
+@pytest.mark.slow
 def test_random_policy_fails_and_seeded_runs_repeat_exactly():
     first = evaluate("random", "default", episodes=3, seed=7, progress=False, **SMALL)
     again = evaluate("random", "default", episodes=3, seed=7, progress=False, **SMALL)
@@ -58,6 +59,7 @@ def test_random_policy_fails_and_seeded_runs_repeat_exactly():
     assert first.per_episode == again.per_episode and first.seeds == [7, 8, 9]
 
 
+@pytest.mark.slow
 def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(capsys):
     one = evaluate("random", "default", episodes=3, seed=7, progress=False, envs=1, **SMALL)
     two = evaluate("random", "default", episodes=3, seed=7, progress=False, envs=2, **SMALL)
@@ -69,6 +71,7 @@ def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(capsys
     assert "--envs 0: give at least 1" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_each_box_of_an_episode_says_where_it_was_set_down():
     """On `jitter` the boxes lie off the centre line and turned, within the variant's ranges; on `default` on it."""
     jitter = evaluate("expert", "jitter", episodes=1, progress=False, **SMALL)
@@ -84,6 +87,7 @@ def test_each_box_of_an_episode_says_where_it_was_set_down():
     assert all(b["grip_offset"] < 0.01 and abs(b["grip_yaw"]) < 10.0 for b in held)
 
 
+@pytest.mark.slow
 def test_distractors_are_let_through_and_counted():
     report = evaluate("expert", "distractors", episodes=2, progress=False, **SMALL)
     assert report.success_rate == 1.0
@@ -176,6 +180,7 @@ def test_outcomes_by_pose_counts_each_band(tmp_path):
                         "| offset 0 to 2.5 cm | 2 | 1 (50%) | 1 |", "| offset 2.5 to 5 cm | 1 | 1 (100%) | 0 |"]
 
 
+@pytest.mark.slow
 def test_outcomes_by_lights_bands_episodes_by_the_lights_their_cameras_saw(tmp_path, closing):
     """``colorsort-analyze by-lights``: `lighting` seeds 10008 and 10001 fall in the dimmest and brightest bands, and
     the sensor camera sees them so (its image at 10008 under half as bright as at 10001); a mix of variants is

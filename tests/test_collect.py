@@ -122,6 +122,7 @@ def test_resume_without_the_turn_is_refused_and_older_datasets_resume_as_before(
         collect(CollectConfig(out=str(copy), resume=True, **{**TINY, "turn_to_box": False}), progress=False)
 
 
+@pytest.mark.slow
 def test_interrupted_run_keeps_finished_episodes_and_resume_completes_it(tiny_dataset, tmp_path, monkeypatch):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -151,6 +152,7 @@ def test_interrupted_run_keeps_finished_episodes_and_resume_completes_it(tiny_da
     assert resumed[len(resumed) - 1]["observation.images.scene"].shape == (3, 64, 64)  # videos joined too
 
 
+@pytest.mark.slow
 def test_ctrl_c_while_an_episode_is_saved_drops_the_shard_and_resume_records_it_again(tiny_dataset, tmp_path,
                                                                                       monkeypatch):
     """LeRobot's save_episode takes the frame count out of its buffer first: an interrupt (a Ray cancel) after that
@@ -179,6 +181,7 @@ def test_ctrl_c_while_an_episode_is_saved_drops_the_shard_and_resume_records_it_
     assert data_table(out)["sim_state"] == data_table(tiny_dataset)["sim_state"]  # same as one straight run
 
 
+@pytest.mark.slow
 def test_same_seeds_give_the_same_data_whatever_the_worker_count(tiny_dataset, tmp_path):
     out = tmp_path / "two_workers"
     summary = collect(CollectConfig(out=str(out), workers=2, **TINY), progress=False, log=lambda _: None)
@@ -358,6 +361,7 @@ def test_a_late_pass_holds_the_belt_pass_and_is_off_at_zero():
     assert not LatePass(0).active and CollectConfig(perturbations=(LatePass(0),)).perturbations == ()
 
 
+@pytest.mark.slow
 def test_brightness_records_a_lighting_demo_under_the_lights_asked_for(tmp_path):
     """--brightness LO,HI: the same episode (seed, boxes, light colour) under lights drawn from LO-HI, seen
     so by the camera, and recorded in the dataset's settings; the variant's own range otherwise."""

@@ -68,6 +68,7 @@ def test_turns_the_cup_to_a_turned_box_only_when_asked(turn, make_env):
     np.testing.assert_allclose(quarter(np.subtract(cup_turns, want)), 0, atol=np.deg2rad(3))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("robot", ["Panda", "UR5e"])
 def test_sorts_with_robosuite_arms(robot, make_env):
     env, expert, obs = make_expert_env(make_env, robot)

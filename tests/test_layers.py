@@ -129,6 +129,7 @@ def third_party_imports() -> set[str]:
     return {m for m in found if not m.startswith(("colorsort", "__future__"))}
 
 
+@pytest.mark.slow
 def test_importing_any_module_changes_no_environment_variable_or_warning_filter():
     names = [n for n, _ in modules() if n != "colorsort"]
     script = (

@@ -2,8 +2,9 @@
 
 The commands are read from docs/benchmark.md and docs/data.md, the pages that show them, so a test
 that passes means the documented command works. Only what the docs say may change is changed: the
-training length and batch (``--steps``, ``--batch_size``), the evaluation's episode count and batch
-size (and ``use_async_envs`` for the synchronous runs). Everything else is LeRobot's defaults.
+training length, batch and data-loading processes (``--steps``, ``--batch_size``, ``--num_workers=0``: each
+spawned loader costs about 15 s of imports), the evaluation's episode count and batch size (and
+``use_async_envs`` for the synchronous runs). Everything else is LeRobot's defaults.
 """
 
 import json
@@ -64,7 +65,7 @@ def readme_checkpoint(tmp_path_factory):
     collect(CollectConfig(out=str(work / "datasets" / "colorsort"), episodes=1, boxes_per_episode=1), progress=False,
             log=lambda _: None)
     argv = replace_flag(replace_flag(documented_command("lerobot-train"), "--steps", "2"), "--batch_size", "2")
-    train = run(argv, work, timeout=600)
+    train = run(argv + ["--num_workers=0"], work, timeout=600)
     assert train.returncode == 0, train.stderr[-3000:]
     assert (work / "outputs/train/act/checkpoints/last/pretrained_model/model.safetensors").is_file()
     return work
@@ -257,7 +258,7 @@ def test_lerobot_trains_a_diffusion_policy_on_colorsort_that_colorsort_eval_runs
     collect = replace_flag(documented_command("colorsort-collect", "--cameras none"), "--episodes", "2")
     assert collect_main(replace_flag(collect, "--boxes-per-episode", "1")[1:]) == 0
     train = replace_flag(documented_command("lerobot-train", "--policy.type=diffusion"), "--steps", "2")
-    done = run(replace_flag(train, "--batch_size", "2"), tmp_path, timeout=600)
+    done = run(replace_flag(train, "--batch_size", "2") + ["--num_workers=0"], tmp_path, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     config = json.loads((tmp_path / "outputs/train/diffusion-state/checkpoints/last/pretrained_model/config.json")
                         .read_text())

@@ -47,7 +47,7 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path, in_proce
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
     argv = ["--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
             "--demos.boxes_per_episode=1", "--training.steps=2", "--training.small_steps=2",
-            "--training.seeds=1000", "--training.save_every=1", "--training.batch_size=2",
+            "--training.seeds=1000", "--training.save_every=1", "--training.batch_size=2", "--training.num_workers=0",
             "--evaluation.select_episodes=1", "--evaluation.variants=tracking,tracking-fast",
             "--evaluation.episodes=1", "--evaluation.other_episodes=1", "--evaluation.curve_episodes=1",
             "--evaluation.episode_length=10", "--workers", "1", "--envs", "1", "--out", str(out)]
@@ -100,8 +100,8 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path, in_proce
     shutil.copytree(out / "data", fresh / "data")
     status, trained = baseline_main(["--recipe", "state-tracking", "--demos.counts=2", "--demos.train_mix=tracking:1",
                                      "--demos.boxes_per_episode=1", "--training.steps=1", "--training.seeds=1000",
-                                     "--training.batch_size=2", "--workers", "1", "--out", str(fresh),
-                                     "--until", "train"], capsys)
+                                     "--training.batch_size=2", "--training.num_workers=0", "--workers", "1",
+                                     "--out", str(fresh), "--until", "train"], capsys)
     assert status == 0 and "lerobot-train" in trained, trained[-3000:]
     import torch
     from safetensors.torch import load_file
@@ -121,8 +121,9 @@ def test_the_camera_recipe_runs_in_small(tmp_path, in_process, capsys):
     status, printed = baseline_main(["--recipe", "camera", "--demos.image_size=32", "--demos.counts=1",
                                      "--demos.train_mix=default:1", "--demos.boxes_per_episode=1",
                                      "--training.steps=2", "--training.seeds=1000", "--training.batch_size=2",
-                                     "--evaluation.variants=default", "--evaluation.episodes=1",
-                                     "--evaluation.curve_episodes=1", "--evaluation.episode_length=5",
+                                     "--training.num_workers=0", "--evaluation.variants=default",
+                                     "--evaluation.episodes=1", "--evaluation.curve_episodes=1",
+                                     "--evaluation.episode_length=5",
                                      "--workers", "1", "--envs", "1", "--out", str(out)], capsys)
     assert status == 0, printed[-3000:]
     (data,) = (out / "data").glob("demos-1-*")
@@ -224,6 +225,7 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
     assert [next(a for a in cmd if a.startswith("--steps=")) for cmd in trained] == ["--steps=2"] * 2 + ["--steps=6"]
 
 
+@pytest.mark.slow
 def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path, in_process):
     """``boxes_by_variant``: the seed variant's demos hold one box each, in a part of their own, merged; the merged
     set's key comes from its parts, so another mix is another set, never the seed variant's trained on."""

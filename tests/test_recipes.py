@@ -57,6 +57,18 @@ def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(
                                                  "--out", str(tmp_path)]) == 2
 
 
+def test_loader_processes_reach_lerobot_train_and_the_shipped_recipes_keep_one(tmp_path):
+    """``--training.num_workers``: lerobot-train's data-loading processes (the shipped recipes' 1, so their cache keys
+    are what they were); 0 loads in the training process; a negative count is refused naming the valid ones."""
+    from colorsort.training.stages import train_command
+
+    _, recipe = colorsort_baseline.parse_args(["--recipe", "state", "--training.num_workers=0"])
+    assert "--num_workers=0" in train_command(recipe, tmp_path / "demos", 10, 1000, tmp_path / "run")
+    assert "--num_workers=1" in train_command(get_recipe("camera"), tmp_path / "demos", 10, 1000, tmp_path / "run")
+    with pytest.raises(ValueError, match="num_workers=-1: give 0"):
+        get_recipe("state", {"training.num_workers": -1})
+
+
 def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
     """``image_shift``: LeRobot's own image transforms, one random shift per image, and a run folder of its own."""
     import draccus

@@ -41,6 +41,7 @@ def eval_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
                           cwd=cwd, timeout=600)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("policy", ["expert", str(STATE_POLICY)], ids=["expert", "state-policy"])
 def test_filming_changes_no_result_and_films_every_step(policy, tmp_path):
     kwargs = dict(episodes=2, cameras=(), image_size=(64, 64), progress=False, episode_length=60)
@@ -97,6 +98,7 @@ def report(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_the_report_folder_holds_the_page_its_videos_and_the_json(report):
     assert json.loads((report / "report.json").read_text()) == json.loads((report.parent / "eval.json").read_text())
     page = (report / "index.html").read_text()

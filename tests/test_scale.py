@@ -36,9 +36,9 @@ def cluster() -> str:
     ray.shutdown()
 
 
-def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(long_reference, cluster, tmp_path):
-    """The same episodes as local processes (the reference's first 4: an episode's data depends on its seed
-    alone), every one once, though a worker was killed outright mid-shard and its shard run again."""
+def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(reference, cluster, tmp_path):
+    """The same episodes as local processes (an episode's data depends on its seed alone), every one once, though a
+    worker was killed outright mid-shard and its shard run again."""
     out = tmp_path / "ds"
     killed = []
     watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 3.0, killed)
@@ -47,7 +47,7 @@ def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(l
     assert killed and summary.retried == 1 and not summary.errors
     assert summary.kept == 4 and summary.dataset_episodes == 4  # every episode, once
     assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1, 2, 3]
-    same_episodes(long_reference, out, only=range(4))
+    same_episodes(reference, out)
 
 
 def test_a_task_its_cancel_does_not_stop_is_reported_stopped_never_ok(cluster):
@@ -133,13 +133,14 @@ def test_the_docs_evaluation_on_ray_works_as_written(tmp_path):
     assert re.search(r"episodes\s+2\b", job.stdout) and re.search(r"success rate\s+100\.0%", job.stdout), job.stdout
 
 
-def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster, long_reference, tmp_path):
+def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster, reference, tmp_path):
     """Ctrl-C to a collection whose tasks run on Ray (a process of its own, joining the module's cluster): every
     finished episode is kept and it says so; --resume on the same cluster completes the dataset. (Local processes:
-    test_collect's interrupted runs.)"""
+    test_collect's interrupted runs.) One shard of 4 episodes on one Ray worker: the interrupt comes when the first
+    is saved, 3 to go (with 2 to go, a loaded CI machine once finished them all before the interrupt took effect)."""
     out = tmp_path / "ds"
-    argv = ["--out", str(out), "--episodes", "8", "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "4",
-            "--workers", "2", "--executor", "ray"]
+    argv = ["--out", str(out), "--episodes", "4", "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "4",
+            "--workers", "1", "--executor", "ray"]
     # SIGINT as a terminal's Ctrl-C delivers it, even where this test runs with SIGINT ignored (a background job)
     run = subprocess.Popen([sys.executable, "-m", "colorsort.cli.collect", *argv, "--address", cluster],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -148,16 +149,14 @@ def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster
     deadline = time.monotonic() + 300
     while not list(staging.glob("shard-*/meta/tasks.parquet")) and time.monotonic() < deadline:
         time.sleep(0.05)  # LeRobot writes tasks.parquet when a shard saves its first episode
-    # that shard has 3 episodes to go (with 2 to go, a loaded CI machine once finished them all before the
-    # interrupt took effect)
     run.send_signal(signal.SIGINT)
     stdout, stderr = run.communicate(timeout=300)
     assert run.returncode == 130, stderr[-3000:]
     assert "interrupted: every finished episode is saved" in stdout
     marker = json.loads((out / MARKER).read_text())
-    assert 1 <= len(marker["episodes"]) < 8 and set(marker["episodes"]) == set(marker["tried"])
+    assert 1 <= len(marker["episodes"]) < 4 and set(marker["episodes"]) == set(marker["tried"])
 
-    summary = collect(CollectConfig(out=str(out), episodes=8, boxes_per_episode=2, cameras=(), shard_size=4,
-                                    workers=2, executor="ray", resume=True), **QUIET)
-    assert not summary.errors and summary.dataset_episodes == 8
-    same_episodes(long_reference, out)
+    summary = collect(CollectConfig(out=str(out), episodes=4, boxes_per_episode=2, cameras=(), shard_size=4,
+                                    workers=1, executor="ray", resume=True), **QUIET)
+    assert not summary.errors and summary.dataset_episodes == 4
+    same_episodes(reference, out)

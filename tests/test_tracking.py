@@ -115,6 +115,7 @@ def test_tracking_variants_give_the_encoder_to_gymnasium_and_lerobot(closing):
     assert ColorSortEnv(task="ColorSort-v0").features["agent_pos"].shape == (23,)
 
 
+@pytest.mark.slow
 def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
     import json
 
@@ -132,6 +133,7 @@ def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
     assert "belt stood still 0.0 s" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env):
     """tracking-fast (0.3 m/s, a box every 2 s): 20 boxes, every one in the bin of its colour, none let go,
     the belt never stopping, at 28 or more a minute (benchmarks/bench_tracking.py runs 10 seeds of 20)."""
@@ -233,6 +235,7 @@ def test_the_jerk_limited_time_from_rest_is_the_s_curves_by_hand():
     assert distance_from_rest(10.0, slow, a, j) == pytest.approx(slow * (10.0 - np.sqrt(slow / j)))
 
 
+@pytest.mark.slow
 def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_env):
     """A box standing at x = 0.45 m, the red bin: each leg of the bound is the largest joint move over its
     datasheet speed, each leg of the ruckig reference is ruckig's own plan (never shorter), the bounds with

@@ -144,6 +144,9 @@ class TrainSettings:
         image_relight: every training image relit at random as the ``lighting`` variant relights the cell
             (brightness, ``ColorJitter``; colour temperature 4,500-12,000 K, ``PlanckianJitter``).
         device: ``lerobot-train``'s device: cpu, cuda or mps.
+        num_workers: ``lerobot-train``'s data-loading processes. LeRobot spawns each (about 15 s of imports before
+            the first batch on this 2-core CPU); 0 loads in the training process. The random draws of the image
+            augmentation depend on it, so it is part of a run's cache key.
     """
 
     steps: int = 6000
@@ -155,9 +158,12 @@ class TrainSettings:
     image_shift: float = 0.0
     image_relight: bool = False
     device: str = "cpu"
+    num_workers: int = 1
 
     def __post_init__(self) -> None:
         _at_least_one(self, "steps", "small_steps", "batch_size")
+        if self.num_workers < 0:
+            raise ConfigError(f"num_workers={self.num_workers}: give 0 (load in the training process) or more")
         if self.passes is not None and not self.passes > 0:
             raise ConfigError(f"passes={self.passes}: give a number above 0, or None for fixed updates")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds) or min(self.seeds) < 0:

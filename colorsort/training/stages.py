@@ -133,7 +133,8 @@ def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Pa
             f"--policy.type={recipe.policy.type}", f"--policy.device={training.device}", "--policy.push_to_hub=false",
             *recipe.policy.args(recipe.demos.image_size), *training.augment_args(),
             f"--batch_size={training.batch_size}", f"--steps={steps}", f"--save_freq={save_every}", "--log_freq=200",
-            "--num_workers=1", f"--seed={seed}", "--wandb.enable=false", f"--output_dir={run_dir}"]
+            f"--num_workers={training.num_workers}", f"--seed={seed}", "--wandb.enable=false",
+            f"--output_dir={run_dir}"]
 
 
 def train_settings(recipe: Recipe) -> dict:
