@@ -220,7 +220,7 @@ def test_docs_tables_are_the_ones_scores_json_gives():
 
     text = {page: page.read_text() for page in pages(REPO)}
     for page, body in text.items():
-        assert fill(body, REPO) == body, f"{page} is stale: run python tools/baseline_tables.py"
+        assert fill(body, REPO, page) == body, f"{page} is stale: run python tools/baseline_tables.py"
     for name, path in SHIPPED.items():
         if (path / "scores.json").is_file():
             assert any(f"<!-- scores baselines/{name} table -->" in t for t in text.values()), name
@@ -323,3 +323,23 @@ def test_every_recipes_policy_arguments_are_ones_lerobot_accepts():
                 True, (58, 58), None)
     with pytest.raises(SystemExit):
         draccus.parse(DiffusionConfig, args=["--crop_shapes=[58,58]"])
+
+
+def test_the_headline_compares_methods_with_their_size_and_where_they_trained(tmp_path):
+    """The method's name from the recipe's policy type, the weights counted from model.safetensors' header (as
+    torch counts them), the machine from the recipe's device, each README linked from the page that shows it."""
+    from safetensors.torch import load_file
+
+    from colorsort.training.tables import headline, parameters
+
+    weights = load_file(SHIPPED["act-state"] / "model.safetensors")
+    assert parameters(SHIPPED["act-state"]) == sum(t.numel() for t in weights.values())
+    assert parameters(tmp_path) is None
+    recipe = {"demos": {"cameras": ["snapshot"]}, "policy": {"type": "diffusion"}, "training": {"device": "cuda"}}
+    (tmp_path / "baselines" / "dp").mkdir(parents=True)
+    (tmp_path / "baselines" / "dp" / "scores.json").write_text(json.dumps(scores([score_row()], recipe)))
+    (line,) = headline(tmp_path / "baselines", tmp_path / "docs").splitlines()[2:]
+    assert line.startswith("| [`dp`](../baselines/dp/README.md) | Diffusion Policy | snapshot | - | ")
+    assert "20 min on a GPU |" in line
+    row = headline(REPO / "baselines").splitlines()[2:]
+    assert any(r.startswith("| [`act-state`](baselines/act-state/README.md) | ACT | state | 0.7 M |") for r in row)

@@ -25,7 +25,7 @@ def main() -> int:
     stale = []
     for page in pages(ROOT):
         text = page.read_text()
-        new = fill(text, ROOT)
+        new = fill(text, ROOT, page)
         if new != text:
             stale.append(page.relative_to(ROOT))
             if not args.check:

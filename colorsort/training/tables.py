@@ -14,12 +14,17 @@ test fails when a page differs from what its JSON gives. Kinds:
 - ``curve``: the learning curve, success on the main variant at each checkpoint;
 - ``mistakes``: where the boxes put in a wrong bin went, box colour -> bin, per variant over every seed;
 - ``headline``: with ``baselines`` as the folder, one line per shipped baseline that has a
-  ``scores.json``: its inputs and its success on each variant (the landing page's table).
+  ``scores.json``: its method, inputs, parameters, training time and success on each variant (the landing page's
+  table, which compares methods and what each costs).
 """
 
 from __future__ import annotations
 
+import json
+import math
+import os
 import re
+import struct
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
@@ -32,14 +37,42 @@ KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
 
 
+METHODS = {"act": "ACT", "diffusion": "Diffusion Policy"}  # LeRobot's policy type -> the method's name
+MACHINES = {"cpu": "on the CPU", "cuda": "on a GPU", "mps": "on Apple's GPU"}
+
+
 def label(scores: Results) -> str:
     """The policy's label in a table ("ACT, sensor+wrist"), from the recipe stored with its scores.
 
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
     recipe = scores.recipe
-    name = {"act": "ACT", "diffusion": "diffusion"}[recipe.get("policy", {"type": "act"})["type"]]
+    name = METHODS[recipe.get("policy", {"type": "act"})["type"]]
     cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
+
+
+def machine(scores: Results) -> str:
+    """Where the policy trained ("on the CPU"), from its recipe's device."""
+    recipe = scores.recipe
+    training = recipe.get("training")
+    return MACHINES[(training if isinstance(training, dict) else recipe).get("device", "cpu")]
+
+
+def parameters(checkpoint: Path) -> int | None:
+    """The number of weights in ``checkpoint/model.safetensors``, read from the file's header (no tensor is
+    loaded); None when there is no such file."""
+    path = checkpoint / "model.safetensors"
+    if not path.is_file():
+        return None
+    with path.open("rb") as f:
+        (length,) = struct.unpack("<Q", f.read(8))  # safetensors: a little-endian u64, then that much JSON
+        header = json.loads(f.read(length))
+    return sum(math.prod(t["shape"]) for name, t in header.items() if name != "__metadata__")
+
+
+def millions(count: int | None) -> str:
+    """"11.8 M"; "-" when unknown."""
+    return "-" if count is None else f"{count / 1e6:.1f} M"
 
 
 def render(scores: Results, kind: str) -> str:
@@ -81,11 +114,13 @@ def mistakes_table(rows: Sequence[ScoreRow]) -> str:
     return "\n".join(lines)
 
 
-def headline(folder: Path) -> str:
-    """A Markdown table: per baseline in ``folder`` (each subfolder with a ``scores.json``), success per variant;
-    with several training seeds, their mean, range and how many."""
-    lines = ["| baseline | policy | inputs | training | success on each variant (one seed: 95% CI, episodes; several: "
-             "mean and range over the seeds) |", "| --- | --- | --- | --- | --- |"]
+def headline(folder: Path, links_from: Path | None = None) -> str:
+    """A Markdown table: per baseline in ``folder`` (each subfolder with a ``scores.json``), its method, inputs,
+    parameters, training and success per variant; with several training seeds, their mean, range and how many.
+    Each baseline links its README, relative to the folder ``links_from`` (default: ``folder``'s parent)."""
+    links_from = folder.parent if links_from is None else links_from
+    lines = ["| baseline | method | inputs | parameters | training | success on each variant (one seed: 95% CI, "
+             "episodes; several: mean and range over the seeds) |", "| --- | --- | --- | --- | --- | --- |"]
     for path in sorted(folder.glob("*/scores.json")):
         scores = Results.load(path)
         by_variant = largest_by_variant(scores.rows)
@@ -95,12 +130,13 @@ def headline(folder: Path) -> str:
         minutes = [r.scored_minutes for r in runs]
         chosen = (f", scored at {scored_checkpoints(runs)} (chosen on validation seeds)"
                   if any(r.checkpoint is not None for r in runs) else "")
-        training = (f"{first.demos} demos, {first.steps} updates{chosen}, {span(minutes)} min on the CPU"
+        training = (f"{first.demos} demos, {first.steps} updates{chosen}, {span(minutes)} min {machine(scores)}"
                     + (f" per seed, {len(runs)} seeds" if len(runs) > 1 else ""))
         name = path.parent.name
-        policy, _, inputs = label(scores).partition(", ")
-        lines.append(f"| [`{name}`]({folder.name}/{name}/README.md) | {policy} | {inputs} | "
-                     f"{training} | {'; '.join(cells)} |")
+        method, _, inputs = label(scores).partition(", ")
+        link = Path(os.path.relpath(path.parent / "README.md", links_from)).as_posix()
+        lines.append(f"| [`{name}`]({link}) | {method} | {inputs} | "
+                     f"{millions(parameters(path.parent))} | {training} | {'; '.join(cells)} |")
     return "\n".join(lines)
 
 
@@ -116,12 +152,15 @@ def variant_cell(variant: str, rows: Sequence[ScoreRow]) -> str:
             f"({len(rows)} x {rows[0].report.episodes})")
 
 
-def fill(text: str, root: Path) -> str:
-    """``text`` with every scores block rewritten from ``root/<dir>/scores.json``."""
+def fill(text: str, root: Path, page: Path | None = None) -> str:
+    """``text`` (of ``page``, default ``root/README.md``: links are relative to it) with every scores block
+    rewritten from ``root/<dir>/scores.json``."""
+    page_folder = (root / "README.md" if page is None else page).parent
+
     def block(m: re.Match) -> str:
         if m["kind"] == "headline":
             note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/*/scores.json`:"
-            return f"{m[1]}{note}\n\n{headline(root / m['dir'])}\n\n{m[5]}"
+            return f"{m[1]}{note}\n\n{headline(root / m['dir'], page_folder)}\n\n{m[5]}"
         path = root / m["dir"] / "scores.json"
         if not path.is_file():
             raise ConfigError(f"a scores block names {m['dir']}, which has no scores.json")
