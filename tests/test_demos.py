@@ -43,6 +43,7 @@ def test_the_robosuite_example_sorts_its_boxes(tmp_path):
     assert "green box -> green bin" in out and "2 of 2 boxes placed in the bin of their colour" in out
 
 
+@pytest.mark.slow
 def test_the_vector_env_example_steps_async_cells(tmp_path):
     out = run("vector_env.py", tmp_path, timeout=300).stdout
     assert "2 async envs: agent_pos (2, 23), environment_state (2, 13), pixels.sensor (2, 32, 32, 3)" in out

@@ -38,6 +38,7 @@ def assert_all_in_their_bins(env, boxes):
     assert env.tally.misplaced == 0 and env.tally.dropped == 0
 
 
+@pytest.mark.slow
 def test_sorts_three_boxes_into_the_right_bins(make_env):
     env, expert, obs = make_expert_env(make_env)
     run_until(env, expert, obs, boxes=3, max_time=25.0)

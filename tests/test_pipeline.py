@@ -246,6 +246,7 @@ def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path, in_proc
     assert other != root and size(root)[0] == size(other)[0] == 1
 
 
+@pytest.mark.slow
 def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_path, in_process):
     """Each perturbation (``--demos.<name>``) reaches colorsort-collect for the training variants it applies to
     and keys their parts: dim lights for the random-lights variant alone, late picks for both; ``--no-turn`` too.

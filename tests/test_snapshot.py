@@ -63,6 +63,7 @@ def test_recorded_snapshots_replay_from_the_states(tmp_path):
     assert report.state_mismatches == 0 and report.min_psnr_db >= MIN_PSNR_DB
 
 
+@pytest.mark.slow
 def test_over_the_experts_carry_the_snapshot_shows_the_box_in_the_cup(make_env):
     """The photo is of the box the cup holds at every step of every carry, turned and offset boxes too."""
     env = make_env(has_offscreen_renderer=True, use_camera_obs=True, camera_names=["sensor", "snapshot"],

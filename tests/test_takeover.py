@@ -21,6 +21,7 @@ def expert_until(env, expert, obs, done, max_time: float = 20.0):
     return obs
 
 
+@pytest.mark.slow
 def test_from_an_arm_pose_of_its_own_it_sorts_every_box(make_env):
     """A policy moved the arm to a pose the expert never takes (low over the belt's far side, wrist turned) while
     the first box rode to the sensor; the expert takes over and sorts all three."""
@@ -34,6 +35,7 @@ def test_from_an_arm_pose_of_its_own_it_sorts_every_box(make_env):
     assert_all_in_their_bins(env, 3)
 
 
+@pytest.mark.slow
 def test_a_box_dropped_back_on_the_belt_is_picked_again(make_env):
     """The cup lets go of its box 2 cm over the belt just after the seal; the box falls back at the sensor, and
     the expert, taking over with nothing held, looks at it again, picks it and sorts every box."""
@@ -49,6 +51,7 @@ def test_a_box_dropped_back_on_the_belt_is_picked_again(make_env):
     assert len(env.grips) == 4  # the dropped box was gripped twice
 
 
+@pytest.mark.slow
 def test_a_box_carried_over_the_wrong_bin_goes_to_the_bin_of_its_colour(make_env):
     """A policy carried the sealed box over another colour's bin; told what it holds, the expert takes it on to
     its own bin and sorts the rest."""
@@ -64,6 +67,7 @@ def test_a_box_carried_over_the_wrong_bin_goes_to_the_bin_of_its_colour(make_env
     assert_all_in_their_bins(env, 3)
 
 
+@pytest.mark.slow
 def test_a_held_box_of_no_bin_colour_goes_back_onto_the_belt_at_the_sensor(make_env):
     """Told that the held box has no bin (a distractor a policy picked), the expert sets it back on the belt at the
     sensor to be looked at again: here the box is in fact red, so the next look sends it to the red bin."""
@@ -103,6 +107,7 @@ def test_on_a_moving_belt_it_meets_the_boxes_that_passed_the_ray_before_it_took_
     assert expert.let_go == 0
 
 
+@pytest.mark.slow
 def test_on_a_moving_belt_a_box_carried_over_the_wrong_bin_goes_to_its_own(make_env):
     env = tracking_env(make_env)
     obs = env.reset(seed=1)
@@ -149,3 +154,52 @@ def test_it_takes_over_from_a_shipped_policy_in_the_middle_of_an_episode(policy_
         assert_all_in_their_bins(env.env, env.variant.boxes)
     finally:
         env.close()
+
+
+@pytest.mark.slow
+def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_path):
+    """The shipped state policy drives each episode for 30-60 steps (drawn from the episode's seed), the expert takes
+    over and finishes it: its frames from the policy's state on are a LeRobot dataset with the demos' features,
+    their own task text and a record of where they came from; an existing folder is refused."""
+    import json
+
+    from baseline_common import SHIPPED
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from colorsort.benchmark.gym_env import ColorSortGymEnv
+    from colorsort.data.schema import STATE
+    from colorsort.data.takeover import (
+        PROVENANCE,
+        TAKEOVER_SEED,
+        TAKEOVER_TASK,
+        TakeoverConfig,
+        handover_step,
+        record_takeovers,
+    )
+
+    out = tmp_path / "takeover"
+    config = TakeoverConfig(policy=str(SHIPPED["act-state"]), out=str(out), episodes=2, handover=(30, 60))
+    summary = record_takeovers(config)
+    seeds = [TAKEOVER_SEED, TAKEOVER_SEED + 1]
+    assert summary.kept == seeds and not summary.failed
+    assert summary.handed_over_at == {s: handover_step(s, (30, 60)) for s in seeds}
+    assert all(30 <= n <= 60 for n in summary.handed_over_at.values())
+    dataset = LeRobotDataset(config.repo_id, root=out)
+    assert dataset.num_episodes == 2 and dataset.num_frames == summary.frames
+    assert list(dataset.meta.tasks.index) == [TAKEOVER_TASK]
+    assert "observation.environment_state" in dataset.meta.features and not dataset.meta.video_keys
+    provenance = json.loads((out / "meta" / PROVENANCE).read_text())
+    assert provenance["policy"] == str(SHIPPED["act-state"]) and provenance["kept"] == seeds
+
+    # the first labelled frame is the state the policy left, not the reset's: the arm has moved
+    reset = ColorSortGymEnv("default", cameras=(), render_mode=None)
+    try:
+        start = reset.reset(seed=seeds[0])[0]["agent_pos"]
+    finally:
+        reset.close()
+    first = dataset[0][STATE].numpy()
+    assert np.abs(first[:6] - start[:6]).max() > 0.05  # [rad]
+    with pytest.raises(ValueError, match="never overwritten"):
+        record_takeovers(config)
+    with pytest.raises(ValueError, match="handover"):
+        TakeoverConfig(policy="p", out="o", handover=(60, 30))

@@ -64,6 +64,7 @@ def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped(make_
     assert [(e.serial, str(e.outcome)) for e in env.events] == [(serial, "dropped")] and env.tally.dropped == 1
 
 
+@pytest.mark.slow
 def test_a_tracking_episode_replays_bit_for_bit(tmp_path):
     from colorsort.data.collect import collect
     from colorsort.data.config import CollectConfig
