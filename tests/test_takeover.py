@@ -168,7 +168,7 @@ def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_
 
     from colorsort.benchmark.gym_env import ColorSortGymEnv
     from colorsort.data.schema import STATE
-    from colorsort.data.takeover import (
+    from colorsort.training.takeover import (
         PROVENANCE,
         TAKEOVER_SEED,
         TAKEOVER_TASK,
