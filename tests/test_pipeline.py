@@ -150,6 +150,29 @@ def test_the_camera_recipe_runs_in_small(tmp_path, in_process, capsys):
     assert eval_main(["--policy", str(model), "--variant", "default", "--episodes", "1", "--image-size", "64"]) == 2
 
 
+@pytest.mark.slow
+def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys):
+    """camera-diffusion, tiny: LeRobot's diffusion policy learns from the images and the arm's state, never the box
+    state (2 updates), and colorsort-eval renders exactly its cameras at its image size."""
+    from colorsort.benchmark.evaluate import observation_settings
+
+    out = tmp_path / "diffusion"
+    status, printed = baseline_main(["--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=default:1",
+                                     "--demos.boxes_per_episode=1", "--training.steps=2", "--training.seeds=1000",
+                                     "--training.batch_size=2", "--training.num_workers=0",
+                                     "--evaluation.variants=default", "--evaluation.episodes=1",
+                                     "--evaluation.curve_episodes=1", "--evaluation.episode_length=5",
+                                     "--workers", "1", "--envs", "1", "--out", str(out)], capsys)
+    assert status == 0, printed[-3000:]
+    (model,) = (out / "train").glob("demos-1-*-2steps-*-seed1000/checkpoints/last/pretrained_model")
+    config = json.loads((model / "config.json").read_text())
+    assert config["type"] == "diffusion"
+    assert set(config["input_features"]) == {"observation.state", "observation.images.sensor",
+                                             "observation.images.wrist"}
+    assert observation_settings(str(model), None, None) == (("sensor", "wrist"), (64, 64))
+    assert f"| default | {get_recipe('camera-diffusion').label} | 1 | 2 steps" in printed
+
+
 def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):
     """Each seed's run has a timing file of its own (a learning curve measures minutes from that run's start)."""
     from colorsort.training import stages
