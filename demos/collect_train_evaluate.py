@@ -8,8 +8,8 @@ That is a smoke run of a minute or two. A policy that sorts takes about 40 demos
 Each stage is the library call a script of your own would make: ``colorsort.data.collect.collect``,
 LeRobot's ``lerobot-train`` (its documented command line, run as a subprocess: LeRobot trains that way), and
 ``colorsort.benchmark.evaluate.evaluate``. Nothing is downloaded (``HF_HUB_OFFLINE=1``). The demos are state only,
-so lerobot-train loads them in its own process (``--num_workers=0``): LeRobot spawns each loader process, about 15 s
-of imports before the first batch.
+so lerobot-train loads them in its own process (``--num_workers=0``): LeRobot spawns each loader process, which
+imports torch and LeRobot again before the first batch.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 The commands are read from docs/benchmark.md and docs/data.md, the pages that show them, so a test
 that passes means the documented command works. Only what the docs say may change is changed: the
 training length, batch and data-loading processes (``--steps``, ``--batch_size``, ``--num_workers=0``: each
-spawned loader costs about 15 s of imports), the evaluation's episode count and batch size (and
+spawned loader imports torch and LeRobot again), the evaluation's episode count and batch size (and
 ``use_async_envs`` for the synchronous runs). Everything else is LeRobot's defaults.
 """
 

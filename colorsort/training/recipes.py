@@ -144,8 +144,8 @@ class TrainSettings:
         image_relight: every training image relit at random as the ``lighting`` variant relights the cell
             (brightness, ``ColorJitter``; colour temperature 4,500-12,000 K, ``PlanckianJitter``).
         device: ``lerobot-train``'s device: cpu, cuda or mps.
-        num_workers: ``lerobot-train``'s data-loading processes. LeRobot spawns each (about 15 s of imports before
-            the first batch on this 2-core CPU); 0 loads in the training process. The random draws of the image
+        num_workers: ``lerobot-train``'s data-loading processes. LeRobot spawns each (each imports torch and
+            LeRobot again before the first batch); 0 loads in the training process. The random draws of the image
             augmentation depend on it, so it is part of a run's cache key.
     """
 

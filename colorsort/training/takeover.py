@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from colorsort.benchmark.evaluate import observation_settings
 from colorsort.benchmark.gym_env import ColorSortGymEnv
-from colorsort.benchmark.policies import LeRobotPolicy, checkpoint_cameras
+from colorsort.benchmark.policies import LeRobotPolicy
 from colorsort.cell.privileged import take_over_view
 from colorsort.data.schema import features, frame
 from colorsort.errors import ConfigError
@@ -90,8 +91,7 @@ def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
     root = Path(config.out)
     if root.exists():
         raise ConfigError(f"{root} exists: give a new folder (a recorded dataset is never overwritten)")
-    cameras, size = checkpoint_cameras(config.policy)
-    image_size = size or (128, 128)
+    cameras, image_size = observation_settings(config.policy, None, None)  # as the checkpoint was trained
     policy = LeRobotPolicy(config.policy)
     # render_mode keeps an off-screen renderer for the expert's sensor camera even where the policy reads none
     gym = ColorSortGymEnv(config.variant, cameras=cameras, image_size=image_size, render_mode="rgb_array")
@@ -114,18 +114,15 @@ def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
                 summary.failed[seed] = "the episode ended before the handover"
                 continue
             expert.take_over(gym.raw_obs, take_over_view(gym.env))
-            frames = 0
             while True:
                 action = expert.act(gym.raw_obs).astype(np.float32)
                 dataset.add_frame(frame(gym.env, gym.raw_obs, action, cameras, TAKEOVER_TASK))
-                frames += 1
                 _, _, terminated, truncated, info = gym.step(action)
                 if terminated or truncated:
                     break
             if info["is_success"]:
                 dataset.save_episode()
                 summary.kept.append(seed)
-                summary.frames += frames
             else:
                 dataset.clear_episode_buffer()
                 summary.failed[seed] = "the expert did not finish every box right"
@@ -133,6 +130,7 @@ def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
         if dataset.has_pending_frames():
             dataset.clear_episode_buffer()  # the episode under way is not saved
         dataset.finalize()
+        summary.frames = dataset.meta.total_frames
         gym.close()
         (root / "meta" / PROVENANCE).write_text(json.dumps(
             {**asdict(config), "kept": summary.kept, "failed": {str(k): v for k, v in summary.failed.items()},
