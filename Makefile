@@ -22,7 +22,7 @@ $(STAMP): setup.py pyproject.toml overrides.txt $(PLUGIN)/pyproject.toml
 	@# --compile-bytecode (68 s against 17 s, warm uv cache) is needed: without it every process compiles what it
 	@# imports (multiprocessing's forkserver runs with -B and never writes the .pyc), a fresh clone's suite took 22
 	@# instead of 14 minutes, and compiling robosuite prints a SyntaxWarning into the console scripts' output
-	$(VENV)/bin/uv pip install --python $(VENV)/bin/python --compile-bytecode -e ".[dev,viz,diffusion]" -e $(PLUGIN) \
+	$(VENV)/bin/uv pip install --python $(VENV)/bin/python --compile-bytecode -e ".[dev,viz,diffusion,gpu]" -e $(PLUGIN) \
 		--override overrides.txt
 	touch $(STAMP)
 

@@ -41,6 +41,9 @@ EXTRAS_REQUIRE = {
     "viz": ["lerobot[viz]>=0.6.1,<0.7"],
     # LeRobot's diffusion policy (diffusers), e.g. lerobot-train --policy.type=diffusion
     "diffusion": ["lerobot[diffusion]>=0.6.1,<0.7"],
+    # the batched cell on MuJoCo Warp (colorsort.batched, colorsort-eval --backend warp): a pair that compiles and
+    # steps the cell with MuJoCo 3.9 (docs/stack.md); 3.12 needs MuJoCo 3.11, which robosuite 1.5.2 does not run on
+    "gpu": ["mujoco-warp==3.11.0", "warp-lang==1.19.0"],
 }
 
 setup(

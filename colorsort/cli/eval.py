@@ -6,6 +6,7 @@ Example::
     colorsort-eval --policy outputs/train/act/checkpoints/last/pretrained_model --variant jitter --episodes 20
     colorsort-eval --policy expert --variant all --episodes 50 --executor ray --envs 8
     colorsort-eval --policy baselines/act-state --variant distractors --episodes 10 --report outputs/report
+    colorsort-eval --policy baselines/act-state --variant default --episodes 4096 --seed 0 --backend warp --envs 4096
     colorsort-eval --list
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` + k), so the same
@@ -23,6 +24,9 @@ boxes handled right).
 variant, every episode's boxes, failures first, with a video of the scene camera per filmed
 episode (``--videos N`` per variant, failures first; default every failure and 3 successes),
 and ``DIR/report.json`` (what ``--json`` writes). Filming changes no result.
+``--backend warp`` runs the episodes on the batched cell (MuJoCo Warp, the ``gpu`` extra; ``--device``
+cuda:0 by default, cpu for Warp's CPU device), ``--envs`` worlds at once in waves, the policy on the
+same device; it writes the same report and JSON, without films (docs/gpu.md).
 Exit status 0 when it ran, 1 when it failed or was interrupted, 2 for bad arguments.
 """
 
@@ -45,6 +49,8 @@ from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, EXECUTORS, ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
 from colorsort.variants import VARIANTS, get_variant
+
+BACKENDS = ("cpu", "warp")  # the warp backend is imported only when chosen: the default install has no warp
 
 
 @guarded("colorsort-eval")
@@ -79,6 +85,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="--report: episodes filmed per variant, failures first (default: every failure and "
                              f"{SUCCESSES_FILMED} successes; 0: none)")
     parser.add_argument("--overwrite", action="store_true", help="--report: replace an existing report folder")
+    parser.add_argument("--backend", default="cpu", choices=BACKENDS,
+                        help="cpu: the CPU cell (the reference); warp: the batched cell on MuJoCo Warp (docs/gpu.md)")
+    parser.add_argument("--device", default=None,
+                        help="--backend warp: Warp's device, cuda:0 (default) or cpu")
     parser.add_argument("--list", action="store_true", help="print the variants, one per line, and exit")
     args = parser.parse_args(argv)
     if args.list:
@@ -95,14 +105,29 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--videos: films go into a report; give --report DIR")
     if args.report and Path(args.report).exists() and any(Path(args.report).iterdir()) and not args.overwrite:
         parser.error(f"--report {args.report} exists and is not empty; pass --overwrite to replace it")
+    if args.device is not None and args.backend != "warp":
+        parser.error("--device: only --backend warp runs on a chosen device")
+    if args.backend == "warp" and (args.report or args.executor != "local"):
+        parser.error("--backend warp writes --json, not --report (no films), and runs on one device, not an --executor")
     executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
     cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
     names = variant_names(args.policy, args.variant)
     film = args.report is not None and args.videos != 0
-    evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
-                                cameras=cameras, episode_length=args.episode_length, executor=executor,
-                                shard_size=args.shard_size, film=film)
-    reports = evaluation.reports
+    if args.backend == "warp":
+        try:
+            from colorsort.batched.evaluate import evaluate_batched
+        except ImportError as error:
+            raise ConfigError(f"--backend warp needs MuJoCo Warp ({error}): pip install -e '.[gpu]'") from error
+
+        reports = [evaluate_batched(args.policy, name, args.episodes, seed=args.seed, envs=args.envs,
+                                    device=args.device or "cuda:0", episode_length=args.episode_length)[0]
+                   for name in names]
+        evaluation = None
+    else:
+        evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
+                                    cameras=cameras, episode_length=args.episode_length, executor=executor,
+                                    shard_size=args.shard_size, film=film)
+        reports = evaluation.reports
     print(format_report(reports[0]) if args.variant != "all" else f"policy {args.policy}\n" + format_table(reports))
     found = [asdict(r) for r in reports]
     payload = found if args.variant == "all" else found[0]
@@ -110,7 +135,7 @@ def main(argv: list[str] | None = None) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(payload, indent=1))
         print(f"metrics: {args.json}")
-    if args.report:
+    if args.report and evaluation is not None:
         if args.overwrite:
             shutil.rmtree(args.report, ignore_errors=True)
         kept = choose_films(reports, evaluation.films, args.videos)

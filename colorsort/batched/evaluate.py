@@ -1,0 +1,181 @@
+"""Evaluate a policy on the batched cell: ``envs`` episodes at once, the policy on the cell's device.
+
+Episodes run in waves of ``envs`` worlds that start together, as LeRobot's ``lerobot-eval`` runs a
+vector env: a policy that keeps state between steps (ACT's queue of actions) is reset once per wave
+and sees every world at the same step of its episode. A world's episode ends as the CPU cell's does
+(``ColorSortGymEnv``: the variant's boxes have left play, or one was misplaced or dropped, or the step
+limit); the world runs on until its wave ends, but nothing after its end counts. Each episode's result
+is the dict ``benchmark.evaluate.EpisodeRunner.episode`` writes, so reports and JSON are the same.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import warp as wp
+from tqdm import tqdm
+
+from colorsort.batched.spec import CellSpec, spec_for_variant
+from colorsort.benchmark.metrics import EvalReport, aggregate
+from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras
+from colorsort.cell.referee import Outcome
+from colorsort.config import BIN_COLORS, COLORS, is_distractor
+from colorsort.errors import ConfigError
+from colorsort.variants import Variant, get_variant
+
+OUTCOMES = list(Outcome)  # kernels' outcome codes index this
+COLOR_NAMES = list(COLORS)
+
+
+
+@dataclass(frozen=True)
+class WaveTiming:
+    """How long a batched evaluation took [s], and how many control steps of all worlds it ran."""
+
+    seconds: float
+    control_steps: int
+    worlds: int
+
+
+class BatchedPolicy:
+    """A LeRobot checkpoint acting on every world at once, on a torch device; or ``random``."""
+
+    def __init__(self, spec: str, device: str, low: np.ndarray, high: np.ndarray):
+        import torch
+
+        check_policy_spec(spec)
+        self.name = spec
+        self.device = torch.device(device)
+        self.low = torch.as_tensor(low, dtype=torch.float32, device=self.device)
+        self.high = torch.as_tensor(high, dtype=torch.float32, device=self.device)
+        self.policy = None
+        if spec == "expert":
+            raise ConfigError("the expert reads the sensor camera and plans on the host: evaluate it with "
+                              "--backend cpu; the warp backend runs 'random' and state-only LeRobot checkpoints")
+        self.cameras: tuple[str, ...] = ()
+        self.image_size: tuple[int, int] | None = None
+        if spec != "random":
+            self.cameras, self.image_size = checkpoint_cameras(spec)
+            from colorsort.benchmark.policies import LeRobotPolicy
+
+            loaded = LeRobotPolicy(spec, device=str(self.device))
+            self.policy = loaded.policy
+            self.preprocessor, self.postprocessor = loaded.preprocessor, loaded.postprocessor
+
+    def reset(self, seed: int) -> None:
+        import torch
+
+        self.generator = torch.Generator(device=self.device).manual_seed(seed)
+        torch.manual_seed(seed)
+        if self.policy is not None:
+            self.policy.reset()
+
+    def act(self, step, task: str):
+        """Actions (N, action size) for a ``BatchedCell`` step's observations."""
+        import torch
+
+        n = step.state.shape[0]
+        if self.policy is None:
+            u = torch.rand((n, len(self.low)), generator=self.generator, device=self.device)
+            return self.low + u * (self.high - self.low)
+        batch = {"observation.state": step.state.to(self.device),
+                 "observation.environment_state": step.env_state.to(self.device), "task": [task] * n}
+        for camera, image in step.images.items():  # as LeRobot's preprocess_observation: (N, 3, H, W) in [0, 1]
+            batch[f"observation.images.{camera}"] = image.to(self.device).permute(0, 3, 1, 2).float() / 255.0
+        with torch.no_grad():
+            return self.postprocessor(self.policy.select_action(self.preprocessor(batch)))
+
+
+def episode_result(cell, world: int, variant: Variant, steps: int, sim_time: float) -> dict:
+    """World ``world``'s episode as ``EpisodeRunner.episode`` reports it (``boxes``: the first ``variant.boxes``)."""
+    events = cell.events(world)[: variant.boxes]
+    outcomes = [OUTCOMES[o] for _, _, _, o, _ in events]
+    wrong = [o for o in outcomes if not o.handled_right]
+    done = len(events) >= variant.boxes
+    success = done and not wrong
+    ended = "success" if success else "failed" if wrong else "time limit"
+    grips = cell.grips.numpy()[world]
+    offsets = cell.draw_offset.numpy()[world]
+    yaws = cell.draw_yaw.numpy()[world]
+    boxes = []
+    for t, serial, color, outcome, b in events:
+        grip = grips[serial] if serial < len(grips) else (math.nan, math.nan)
+        boxes.append({"time": t, "color": COLOR_NAMES[color], "outcome": OUTCOMES[outcome].value,
+                      "bin": BIN_COLORS[b] if b >= 0 else None, "offset": round(float(offsets[serial]), 4),
+                      "yaw": round(float(np.rad2deg(yaws[serial])), 2),
+                      "grip_offset": None if math.isnan(grip[0]) else round(float(grip[0]), 4),
+                      "grip_yaw": None if math.isnan(grip[1]) else round(float(grip[1]), 2)})
+    count = {o: sum(x is o for x in outcomes) for o in Outcome}
+    return {"seed": int(cell.seeds[world]), "success": success, "ended": ended, "steps": steps,
+            "correct": count[Outcome.PLACED], "misplaced": count[Outcome.MISPLACED],
+            "dropped": count[Outcome.DROPPED], "let_through": count[Outcome.REJECTED],
+            "distractors": sum(is_distractor(COLOR_NAMES[c]) for _, _, c, _, _ in events), "sim_time": sim_time,
+            "sorted_times": [t for (t, *_), o in zip(events, outcomes, strict=True) if o.handled_right],
+            "boxes": boxes}
+
+
+def run_waves(cell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
+              progress: bool = True) -> tuple[list[dict], WaveTiming]:
+    """Every seed's episode, in waves of ``cell.worlds``; results in seed order."""
+    import torch
+
+    n = cell.worlds
+    task = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours."
+    results: list[dict] = []
+    bar = tqdm(total=len(seeds), desc=f"{policy.name} on {variant.name} (warp)", unit="episode", disable=not progress)
+    start, control_steps = time.perf_counter(), 0
+    handled_right = torch.tensor([o.handled_right for o in OUTCOMES], device=cell.torch_device)
+    for first in range(0, len(seeds), n):
+        wave = seeds[first : first + n]
+        padded = wave + [wave[-1]] * (n - len(wave))  # idle worlds repeat a seed; their results are dropped
+        out = cell.reset(padded)
+        policy.reset(int(wave[0]))
+        ended = np.zeros(n, bool)
+        ended[len(wave):] = True
+        finished: dict[int, dict] = {}
+        for step in range(1, max_steps + 1):
+            out = cell.step(policy.act(out, task))
+            control_steps += 1
+            k = torch.clamp(wp.to_torch(cell.n_events), max=variant.boxes)
+            outcome = wp.to_torch(cell.ev_outcome)[:, : variant.boxes]
+            counted = torch.arange(variant.boxes, device=cell.torch_device)[None] < k[:, None]
+            wrong = (counted & ~handled_right[outcome.clamp(min=0)]).any(1)
+            stop = (wrong | (k >= variant.boxes)).cpu().numpy() | (step >= max_steps)
+            for w in np.flatnonzero(stop & ~ended):
+                finished[int(w)] = episode_result(cell, int(w), variant, step, step * cell.control_dt)
+                bar.update()
+            ended |= stop
+            if ended.all():
+                break
+        results += [finished[w] for w in range(len(wave))]
+    bar.close()
+    return results, WaveTiming(time.perf_counter() - start, control_steps, n)
+
+
+def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed: int | None = None,
+                     envs: int = 1024, device: str = "cuda:0", episode_length: int | None = None,
+                     progress: bool = True, spec: CellSpec | None = None) -> tuple[EvalReport, WaveTiming]:
+    """``episodes`` episodes of a policy on one variant, ``envs`` worlds at once on Warp's ``device``
+    ("cpu" or "cuda:0"); the report is ``metrics.aggregate``'s, as for the CPU cell. ``spec`` saves
+    building the variant's cell with robosuite (``CellSpec.load``)."""
+    from colorsort.batched.cell import BatchedCell
+    from colorsort.benchmark.evaluate import episode_seeds
+
+    if envs < 1:
+        raise ConfigError(f"envs={envs}: give at least 1")
+    variant = get_variant(variant_name)
+    seeds = episode_seeds(variant, episodes, seed)
+    spec = spec or spec_for_variant(variant.name)
+    torch_device = "cpu" if device == "cpu" else device
+    policy = BatchedPolicy(policy_spec if policy_spec in ("expert", "random") else str(Path(policy_spec).resolve()),
+                           torch_device, spec.action_low, spec.action_high)
+    max_steps = episode_length or int(np.ceil(variant.time_limit * spec.control_freq))
+    spawns = int(np.ceil(max_steps / spec.control_freq / variant.task_config.spawn_period)) + 2
+    cell = BatchedCell(spec, variant, min(envs, len(seeds)), device=device, max_boxes=max(variant.boxes + 2, spawns),
+                       cameras=policy.cameras, image_size=policy.image_size or (64, 64))
+    results, timing = run_waves(cell, policy, variant, seeds, max_steps, progress)
+    return aggregate(str(policy_spec), variant.name, results), timing

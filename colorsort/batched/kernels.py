@@ -1,0 +1,393 @@
+"""The cell's rules as Warp kernels, one thread per world (or per contact), for ``BatchedCell``.
+
+Each kernel is the twin of a Python part of the CPU cell, named in its docstring; ``tests/test_batched.py``
+holds the rule functions (``@wp.func``) to their Python twins on the same inputs. Box status, outcome and
+bin codes are the CPU cell's enum orders (``boxes.BoxStatus``, ``referee.Outcome``, ``config.BIN_COLORS``).
+"""
+
+from __future__ import annotations
+
+import warp as wp
+from mujoco_warp._src import math as mjmath
+from mujoco_warp._src.types import vec11
+
+PARKED = wp.constant(0)  # BoxStatus order: PARKED, IN_PLAY, IN_BIN
+IN_PLAY = wp.constant(1)
+IN_BIN = wp.constant(2)
+NONE = wp.constant(-1)  # no outcome yet / no bin
+PLACED = wp.constant(0)  # Outcome order: PLACED, MISPLACED, DROPPED, REJECTED
+MISPLACED = wp.constant(1)
+DROPPED = wp.constant(2)
+REJECTED = wp.constant(3)
+N_BIN_COLORS = wp.constant(3)  # colours 0..2 (red, green, blue) have bins; 3, 4 (yellow, purple) do not
+
+
+@wp.struct
+class Layout:
+    """``config.CellLayout`` and the referee's thresholds [m, m/s]."""
+
+    belt_end_x: float
+    belt_y: float
+    belt_width: float
+    belt_top_z: float
+    box_size: float
+    spawn_x: float
+    sensor_range: float
+    bin_x: float
+    bin_y0: float
+    bin_spacing: float
+    bin_half_x: float  # inner half-size of a bin's footprint
+    bin_half_y: float
+    bin_height: float
+    settled_speed: float
+
+
+@wp.func
+def belt_runs(distance: float, sensor_range: float, tracking: int, belt_pass: int) -> int:
+    """``conveyor.Belt.drive``: the belt runs unless the ray sees a box (a tracking belt always runs)."""
+    detected = distance >= 0.0 and distance <= sensor_range
+    if tracking != 0 or belt_pass != 0 or not detected:
+        return 1
+    return 0
+
+
+@wp.func
+def bin_under(x: float, y: float, L: Layout) -> int:
+    """``referee.Referee.bin_under``: the bin whose inner footprint holds (x, y), or -1."""
+    for k in range(3):
+        bx = L.bin_x
+        by = L.bin_y0 + float(k) * L.bin_spacing
+        if wp.abs(x - bx) < L.bin_half_x and wp.abs(y - by) < L.bin_half_y:
+            return k
+    return -1
+
+
+@wp.func
+def outcome_of(color: int, pos: wp.vec3, speed: float, L: Layout) -> wp.vec2i:
+    """``referee.Referee.outcome``: (outcome, bin) of a box of ``color`` at ``pos`` moving at ``speed``;
+    (-1, -1) while it is still in play."""
+    half = L.box_size / 2.0
+    b = bin_under(pos[0], pos[1], L)
+    if b >= 0 and pos[2] < L.bin_height and speed < L.settled_speed:
+        if color == b:
+            return wp.vec2i(PLACED, b)
+        return wp.vec2i(MISPLACED, b)
+    on_floor = pos[2] < half + 0.02 and b < 0
+    past_end = pos[0] < L.belt_end_x and wp.abs(pos[1] - L.belt_y) < L.belt_width and pos[2] < L.belt_top_z + half
+    if on_floor or past_end:
+        if color < N_BIN_COLORS:
+            return wp.vec2i(DROPPED, -1)
+        return wp.vec2i(REJECTED, -1)
+    return wp.vec2i(NONE, NONE)
+
+
+@wp.kernel
+def apply_action(action: wp.array2d(dtype=float), n_joints: int, goal: wp.array2d(dtype=float),
+                 suction_cmd: wp.array(dtype=int), belt_pass: wp.array(dtype=int)):
+    """``ColorSort._pre_action`` at a policy step: joint targets, suction on when > 0, belt pass when > 0."""
+    w = wp.tid()
+    for j in range(n_joints):
+        goal[w, j] = action[w, j]
+    suction_cmd[w] = wp.where(action[w, n_joints] > 0.0, 1, 0)
+    belt_pass[w] = wp.where(action[w, n_joints + 1] > 0.0, 1, 0)
+
+
+@wp.kernel
+def servo_error(goal: wp.array2d(dtype=float), qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float),
+                arm_qpos: wp.array(dtype=int), arm_dof: wp.array(dtype=int), kp: wp.array(dtype=float),
+                kd: wp.array(dtype=float), vec: wp.array2d(dtype=float)):
+    """robosuite's ``JointPositionController``, first half: kp (goal - q) - kd qdot on the arm's dofs."""
+    w, j = wp.tid()
+    v = arm_dof[j]
+    vec[w, v] = kp[j] * (goal[w, j] - qpos[w, arm_qpos[j]]) - kd[j] * qvel[w, v]
+
+
+@wp.kernel
+def servo_torque(res: wp.array2d(dtype=float), qfrc_bias: wp.array2d(dtype=float), arm_dof: wp.array(dtype=int),
+                 arm_act: wp.array(dtype=int), low: wp.array(dtype=float), high: wp.array(dtype=float),
+                 ctrl: wp.array2d(dtype=float)):
+    """Second half: M (kp e - kd qdot) + bias, clipped to the actuators' ranges (robosuite's ``Robot.control``)."""
+    w, j = wp.tid()
+    v = arm_dof[j]
+    ctrl[w, arm_act[j]] = wp.clamp(res[w, v] + qfrc_bias[w, v], low[j], high[j])
+
+
+@wp.kernel
+def drive(suction_cmd: wp.array(dtype=int), belt_pass: wp.array(dtype=int), sensordata: wp.array2d(dtype=float),
+          ray: int, L: Layout, tracking: int, speed: float, dt: float, suction: int, suction_off: float,
+          suction_on: float, box_weld: wp.array(dtype=int), qpos: wp.array2d(dtype=float),
+          qvel: wp.array2d(dtype=float), belt_qpos: int, belt_dof: int, ctrl: wp.array2d(dtype=float),
+          held: wp.array(dtype=int), eq_active: wp.array2d(dtype=bool), detected: wp.array(dtype=int),
+          running: wp.array(dtype=int), travel: wp.array(dtype=wp.float64)):
+    """Before each physics step: the suction valve (``SuctionGripper``), the belt and its ray
+    (``conveyor.Belt.drive``), and the seal's release (``suction.VacuumSeal.update``)."""
+    w = wp.tid()
+    ctrl[w, suction] = wp.where(suction_cmd[w] != 0, suction_on, suction_off)
+    distance = sensordata[w, ray]
+    detected[w] = wp.where(distance >= 0.0 and distance <= L.sensor_range, 1, 0)
+    run = belt_runs(distance, L.sensor_range, tracking, belt_pass[w])
+    running[w] = run
+    qpos[w, belt_qpos] = 0.0
+    qvel[w, belt_dof] = wp.where(run != 0, -speed, 0.0)
+    if run != 0:
+        travel[w] = travel[w] + wp.float64(speed) * wp.float64(dt)
+    if suction_cmd[w] == 0 and held[w] >= 0:
+        eq_active[w, box_weld[held[w]]] = False
+        held[w] = -1
+
+
+@wp.kernel
+def seal_find(nacon: wp.array(dtype=int), geom: wp.array(dtype=wp.vec2i), frame: wp.array(dtype=wp.mat33),
+              worldid: wp.array(dtype=int), pad: int, box_of_geom: wp.array(dtype=int), cup_body: int,
+              xmat: wp.array2d(dtype=wp.mat33), suction_cmd: wp.array(dtype=int), held: wp.array(dtype=int),
+              cos_seal: float, candidate: wp.array(dtype=int)):
+    """``suction.VacuumSeal._box_flat_on_pad``: a pad-box contact whose normal is within the seal angle of
+    the cup's axis, in a world where suction is on and nothing is held; the lowest pool index wins."""
+    k = wp.tid()
+    if k >= nacon[0]:
+        return
+    w = worldid[k]
+    if suction_cmd[w] == 0 or held[w] >= 0:
+        return
+    g = geom[k]
+    other = int(-1)  # noqa: UP018  (Warp: a variable, not a constant)
+    if g[0] == pad:
+        other = g[1]
+    elif g[1] == pad:
+        other = g[0]
+    if other < 0:
+        return
+    box = box_of_geom[other]
+    if box < 0:
+        return
+    R = xmat[w, cup_body]
+    axis = wp.vec3(R[0, 2], R[1, 2], R[2, 2])
+    normal = wp.vec3(frame[k][0, 0], frame[k][0, 1], frame[k][0, 2])
+    if wp.abs(wp.dot(normal, axis)) >= cos_seal:
+        wp.atomic_min(candidate, w, box)
+
+
+@wp.kernel
+def seal_make(candidate: wp.array(dtype=int), pool_size: int, cup_body: int, box_body: wp.array(dtype=int),
+              box_weld: wp.array(dtype=int), box_serial: wp.array2d(dtype=int), xpos: wp.array2d(dtype=wp.vec3),
+              xquat: wp.array2d(dtype=wp.quat), xmat: wp.array2d(dtype=wp.mat33), eq_data: wp.array2d(dtype=vec11),
+              eq_active: wp.array2d(dtype=bool), held: wp.array(dtype=int), grips: wp.array3d(dtype=float)):
+    """``suction.VacuumSeal._seal``: weld the candidate box to the cup at the pose they have now; record the
+    grip (``VacuumSeal.grip``: offset from the cup's axis [m], turn [deg] in [-45, 45)) under its serial."""
+    w = wp.tid()
+    box = candidate[w]
+    candidate[w] = pool_size
+    if box >= pool_size:
+        return
+    body = box_body[box]
+    R = xmat[w, cup_body]
+    rel = wp.transpose(R) @ (xpos[w, body] - xpos[w, cup_body])
+    q = mjmath.mul_quat(mjmath.quat_inv(xquat[w, cup_body]), xquat[w, body])
+    eq = box_weld[box]
+    data = eq_data[w, eq]
+    data[0] = 0.0
+    data[1] = 0.0
+    data[2] = 0.0
+    data[3] = rel[0]
+    data[4] = rel[1]
+    data[5] = rel[2]
+    data[6] = q[0]
+    data[7] = q[1]
+    data[8] = q[2]
+    data[9] = q[3]
+    eq_data[w, eq] = data
+    eq_active[w, eq] = True
+    held[w] = box
+    serial = box_serial[w, box]
+    if serial >= 0 and serial < grips.shape[1]:
+        M = mjmath.quat_to_mat(q)
+        yaw = wp.degrees(wp.atan2(M[1, 0], M[0, 0]))
+        grips[w, serial, 0] = wp.sqrt(rel[0] * rel[0] + rel[1] * rel[1])
+        grips[w, serial, 1] = wp.mod(yaw + 45.0 + 360.0, 90.0) - 45.0
+
+
+@wp.func
+def park(w: int, box: int, box_qpos: wp.array(dtype=int), box_dof: wp.array(dtype=int),
+         box_body: wp.array(dtype=int), box_weld: wp.array(dtype=int), park_pos: wp.array(dtype=wp.vec3),
+         qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), gravcomp: wp.array2d(dtype=float),
+         status: wp.array2d(dtype=int), bin_of: wp.array2d(dtype=int), serial: wp.array2d(dtype=int),
+         held: wp.array(dtype=int), eq_active: wp.array2d(dtype=bool)):
+    """``plant.Plant.remove_box``: the cup lets go of it, and it goes back to the pool."""
+    if held[w] == box:
+        eq_active[w, box_weld[box]] = False
+        held[w] = -1
+    qa = box_qpos[box]
+    va = box_dof[box]
+    p = park_pos[box]
+    qpos[w, qa + 0] = p[0]
+    qpos[w, qa + 1] = p[1]
+    qpos[w, qa + 2] = p[2]
+    qpos[w, qa + 3] = 1.0
+    qpos[w, qa + 4] = 0.0
+    qpos[w, qa + 5] = 0.0
+    qpos[w, qa + 6] = 0.0
+    for i in range(6):
+        qvel[w, va + i] = 0.0
+    gravcomp[w, box_body[box]] = 1.0
+    status[w, box] = PARKED
+    bin_of[w, box] = -1
+    serial[w, box] = -1
+
+
+@wp.kernel
+def referee(now: wp.array(dtype=wp.float64), pool_size: int, L: Layout, bin_capacity: int,
+            box_qpos: wp.array(dtype=int), box_dof: wp.array(dtype=int), box_body: wp.array(dtype=int),
+            box_weld: wp.array(dtype=int), park_pos: wp.array(dtype=wp.vec3), xpos: wp.array2d(dtype=wp.vec3),
+            qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), gravcomp: wp.array2d(dtype=float),
+            status: wp.array2d(dtype=int), color: wp.array2d(dtype=int), bin_of: wp.array2d(dtype=int),
+            serial: wp.array2d(dtype=int), held: wp.array(dtype=int), eq_active: wp.array2d(dtype=bool),
+            n_events: wp.array(dtype=int), ev_time: wp.array2d(dtype=wp.float64), ev_serial: wp.array2d(dtype=int),
+            ev_color: wp.array2d(dtype=int), ev_outcome: wp.array2d(dtype=int), ev_bin: wp.array2d(dtype=int),
+            reward: wp.array(dtype=float), bins_emptied: wp.array(dtype=int)):
+    """``referee.Referee.update``: judge every box in play, in pool order; record each that left play;
+    empty a full bin; boxes that left the belt or fell go back to the pool."""
+    w = wp.tid()
+    r = float(0.0)  # noqa: UP018
+    for box in range(pool_size):
+        if status[w, box] != IN_PLAY:
+            continue
+        va = box_dof[box]
+        speed = wp.length(wp.vec3(qvel[w, va], qvel[w, va + 1], qvel[w, va + 2]))
+        res = outcome_of(color[w, box], xpos[w, box_body[box]], speed, L)
+        outcome = res[0]
+        if outcome < 0:
+            continue
+        k = n_events[w]
+        if k < ev_time.shape[1]:
+            ev_time[w, k] = now[w]
+            ev_serial[w, k] = serial[w, box]
+            ev_color[w, k] = color[w, box]
+            ev_outcome[w, k] = outcome
+            ev_bin[w, k] = res[1]
+        n_events[w] = k + 1
+        if outcome == PLACED:
+            r += 1.0
+        elif outcome != REJECTED:
+            r -= 1.0
+        if res[1] >= 0:
+            status[w, box] = IN_BIN
+            bin_of[w, box] = res[1]
+            inside = int(0)  # noqa: UP018
+            for other in range(pool_size):
+                if status[w, other] == IN_BIN and bin_of[w, other] == res[1]:
+                    inside += 1
+            if inside >= bin_capacity:
+                for other in range(pool_size):
+                    if status[w, other] == IN_BIN and bin_of[w, other] == res[1]:
+                        park(w, other, box_qpos, box_dof, box_body, box_weld, park_pos, qpos, qvel, gravcomp, status,
+                             bin_of, serial, held, eq_active)
+                bins_emptied[w] = bins_emptied[w] + 1
+        else:
+            park(w, box, box_qpos, box_dof, box_body, box_weld, park_pos, qpos, qvel, gravcomp, status, bin_of,
+                 serial, held, eq_active)
+    reward[w] = r
+
+
+@wp.kernel
+def spawn(now: wp.array(dtype=wp.float64), next_time: wp.array(dtype=wp.float64), period: float, pool_size: int,
+          L: Layout, draw_color: wp.array2d(dtype=int), draw_offset: wp.array2d(dtype=float),
+          draw_yaw: wp.array2d(dtype=float), palette: wp.array(dtype=wp.vec4), box_qpos: wp.array(dtype=int),
+          box_dof: wp.array(dtype=int), box_body: wp.array(dtype=int), box_geom: wp.array(dtype=int),
+          xpos: wp.array2d(dtype=wp.vec3), qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float),
+          gravcomp: wp.array2d(dtype=float), geom_rgba: wp.array2d(dtype=wp.vec4), status: wp.array2d(dtype=int),
+          color: wp.array2d(dtype=int), serial: wp.array2d(dtype=int), next_serial: wp.array(dtype=int),
+          spawned: wp.array(dtype=int)):
+    """``conveyor.Spawner.spawn_if_due``: when a box is due, the pool has one and the spawn point is clear,
+    set the lowest parked box down with the episode's next draw (``schedule.episode_draws``)."""
+    w = wp.tid()
+    if now[w] + wp.float64(1e-9) < next_time[w]:
+        return
+    first = int(-1)  # noqa: UP018
+    clear = int(1)  # noqa: UP018
+    for box in range(pool_size):
+        if status[w, box] == PARKED and first < 0:
+            first = box
+        if status[w, box] == IN_PLAY:
+            p = xpos[w, box_body[box]]
+            if wp.abs(p[0] - L.spawn_x) < 1.5 * L.box_size and wp.abs(p[1] - L.belt_y) < L.belt_width:
+                clear = 0
+    n = next_serial[w]
+    if clear == 0 or first < 0 or n >= draw_color.shape[1]:
+        return
+    c = draw_color[w, n]
+    yaw = draw_yaw[w, n]
+    qa = box_qpos[first]
+    va = box_dof[first]
+    qpos[w, qa + 0] = L.spawn_x
+    qpos[w, qa + 1] = L.belt_y + draw_offset[w, n]
+    qpos[w, qa + 2] = L.belt_top_z + L.box_size / 2.0 + 0.002
+    qpos[w, qa + 3] = wp.cos(yaw / 2.0)
+    qpos[w, qa + 4] = 0.0
+    qpos[w, qa + 5] = 0.0
+    qpos[w, qa + 6] = wp.sin(yaw / 2.0)
+    for i in range(6):
+        qvel[w, va + i] = 0.0
+    geom_rgba[w, box_geom[first]] = palette[c]
+    gravcomp[w, box_body[first]] = 0.0
+    status[w, first] = IN_PLAY
+    color[w, first] = c
+    serial[w, first] = n
+    next_serial[w] = n + 1
+    next_time[w] = now[w] + wp.float64(period)
+    spawned[w] = spawned[w] + 1
+
+
+@wp.kernel
+def observe(qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), site_xpos: wp.array2d(dtype=wp.vec3),
+            xquat: wp.array2d(dtype=wp.quat), arm_qpos: wp.array(dtype=int), arm_dof: wp.array(dtype=int),
+            n_joints: int, eef_site: int, eef_body: int, suction_cmd: wp.array(dtype=int), held: wp.array(dtype=int),
+            detected: wp.array(dtype=int), running: wp.array(dtype=int), travel: wp.array(dtype=wp.float64),
+            tracking: int, pool_size: int, status: wp.array2d(dtype=int), color: wp.array2d(dtype=int),
+            serial: wp.array2d(dtype=int), box_qpos: wp.array(dtype=int), n_colors: int,
+            state: wp.array2d(dtype=float), env_state: wp.array2d(dtype=float)):
+    """``schema.robot_state`` and ``schema.box_state`` (``Plant.next_box_state``): ``observation.state`` and
+    ``observation.environment_state`` of every world."""
+    w = wp.tid()
+    i = int(0)  # noqa: UP018
+    for j in range(n_joints):
+        state[w, i] = qpos[w, arm_qpos[j]]
+        i += 1
+    for j in range(n_joints):
+        state[w, i] = qvel[w, arm_dof[j]]
+        i += 1
+    p = site_xpos[w, eef_site]
+    q = xquat[w, eef_body]
+    for k in range(3):
+        state[w, i + k] = p[k]
+    i += 3
+    state[w, i + 0] = q[1]  # robosuite's eef_quat is (x, y, z, w)
+    state[w, i + 1] = q[2]
+    state[w, i + 2] = q[3]
+    state[w, i + 3] = q[0]
+    i += 4
+    state[w, i + 0] = float(suction_cmd[w])
+    state[w, i + 1] = wp.where(held[w] >= 0, 1.0, 0.0)
+    state[w, i + 2] = float(detected[w])
+    state[w, i + 3] = float(running[w])
+    if tracking != 0:
+        state[w, i + 4] = float(travel[w])
+    best = int(-1)  # noqa: UP018
+    for box in range(pool_size):
+        if status[w, box] == IN_PLAY and (best < 0 or serial[w, box] < serial[w, best]):
+            best = box
+    for k in range(n_colors + 8):
+        env_state[w, k] = 0.0
+    if best >= 0:
+        env_state[w, color[w, best]] = 1.0
+        qa = box_qpos[best]
+        for k in range(7):
+            env_state[w, n_colors + k] = qpos[w, qa + k]
+        env_state[w, n_colors + 7] = 1.0
+
+
+@wp.kernel
+def advance_clock(now: wp.array(dtype=wp.float64), dt: wp.float64, steps: wp.array(dtype=int)):
+    """``cur_time += control_timestep`` (float64, as robosuite adds it) and the step count."""
+    w = wp.tid()
+    now[w] = now[w] + dt
+    steps[w] = steps[w] + 1

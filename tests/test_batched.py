@@ -1,0 +1,208 @@
+"""The batched cell on MuJoCo Warp (``colorsort.batched``), on Warp's CPU device: CI has no GPU.
+
+Warp compiles MuJoCo Warp's kernels once per machine (about four minutes on 2 cores, then cached under
+~/.cache/warp); the physics tests share one cell per module so that the compile happens once per run.
+The rule kernels are held to their Python twins on their own inputs, where physics is not the point.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from colorsort.batched.schedule import COLOR_NAMES, episode_draws
+from colorsort.benchmark.gym_env import ColorSortGymEnv
+from colorsort.benchmark.policies import ExpertPolicy
+from colorsort.cell.referee import Outcome, Referee
+from colorsort.config import BIN_COLORS, CellLayout
+from colorsort.variants import get_variant
+
+SEED = 10_000  # the first evaluation seed of `default`: its first box, red, is placed at 6.4 s by the expert
+REPLAY_STEPS = 140  # control steps of the expert replayed: the first box is in its bin by then
+
+
+@pytest.mark.parametrize("variant", ["tracking-jitter", "lighting"])
+def test_a_seed_gives_the_batched_cell_the_cpu_cells_boxes(variant):
+    """The host-side draws (colour, offset, yaw of every box; the lights) are those the CPU cell draws."""
+    env = ColorSortGymEnv(variant, cameras=(), render_mode=None)
+    try:
+        for seed in (SEED, SEED + 7):
+            env.reset(seed=seed)
+            hold = np.r_[env.env.robot_spec.home, -1.0, -1.0].astype(np.float32)
+            for _ in range(260):
+                env.step(hold)
+            placed = env.env.placements
+            draws = episode_draws(get_variant(variant), seed, len(placed))
+            assert len(placed) >= 2
+            assert [p.color for p in placed] == [COLOR_NAMES[c] for c in draws.color]
+            np.testing.assert_allclose([p.offset for p in placed], draws.offset, atol=1e-12)
+            np.testing.assert_allclose([p.yaw for p in placed], np.rad2deg(draws.yaw), atol=1e-9)
+            assert env.env.plant.lighting == draws.lighting
+    finally:
+        env.close()
+
+
+def test_the_rule_kernels_give_what_their_python_twins_give():
+    """The referee's verdict and the belt's run/stop rule, as Warp functions, against the CPU cell's Python."""
+    import warp as wp
+
+    from colorsort.batched import kernels as K
+    from colorsort.batched.cell import layout_struct
+
+    layout = CellLayout()
+    lay = layout_struct(layout)
+
+    @wp.kernel
+    def judge(color: wp.array(dtype=int), pos: wp.array(dtype=wp.vec3), speed: wp.array(dtype=float), L: K.Layout,
+              out: wp.array(dtype=wp.vec2i)):
+        i = wp.tid()
+        out[i] = K.outcome_of(color[i], pos[i], speed[i], L)
+
+    @wp.kernel
+    def belt(distance: wp.array(dtype=float), tracking: wp.array(dtype=int), belt_pass: wp.array(dtype=int),
+             sensor_range: float, out: wp.array(dtype=int)):
+        i = wp.tid()
+        out[i] = K.belt_runs(distance[i], sensor_range, tracking[i], belt_pass[i])
+
+    rng = np.random.default_rng(0)
+    n = 4000
+    # positions over the bins, the belt, its end and the floor; speeds around the settling threshold
+    pos = np.column_stack([rng.uniform(0.0, 1.4, n), rng.uniform(-0.6, 0.8, n), rng.uniform(0.0, 0.6, n)])
+    pos = pos.astype(np.float32)
+    speed = rng.uniform(0.0, 0.1, n).astype(np.float32)
+    color = rng.integers(0, 5, n).astype(np.int32)
+    with wp.ScopedDevice("cpu"):
+        out = wp.zeros(n, dtype=wp.vec2i)
+        wp.launch(judge, dim=n, inputs=[wp.array(color, dtype=int), wp.array(pos, dtype=wp.vec3),
+                                        wp.array(speed, dtype=float), lay, out])
+        got = out.numpy()
+    referee = Referee(layout, bin_capacity=4)
+    outcomes, colors = list(Outcome), list(COLOR_NAMES)
+    want = []
+    for c, p, s in zip(color, pos.astype(float), speed.astype(float), strict=True):
+        outcome, bin_color = referee.outcome(colors[c], p, s)
+        want.append((outcomes.index(outcome) if outcome else -1, BIN_COLORS.index(bin_color) if bin_color else -1))
+    assert {tuple(w) for w in want} >= {(0, 0), (1, 1), (2, -1), (3, -1), (-1, -1)}  # every verdict was drawn
+    assert (got == np.array(want)).all()
+
+    distance = rng.choice([-1.0, 0.1, 0.26, 0.3], n).astype(np.float32)  # -1: MuJoCo's "no hit"
+    tracking, belt_pass = rng.integers(0, 2, n).astype(np.int32), rng.integers(0, 2, n).astype(np.int32)
+    with wp.ScopedDevice("cpu"):
+        runs = wp.zeros(n, dtype=int)
+        wp.launch(belt, dim=n, inputs=[wp.array(distance, dtype=float), wp.array(tracking, dtype=int),
+                                       wp.array(belt_pass, dtype=int), layout.sensor_range, runs])
+        got_runs = runs.numpy()
+    detected = (distance >= 0) & (distance <= layout.sensor_range)  # conveyor.Belt.sense, then Belt.drive
+    np.testing.assert_array_equal(got_runs, (tracking | belt_pass | ~detected).astype(int))
+
+
+@pytest.fixture(scope="module")
+def replay():
+    """The CPU cell's expert on `default`, seed SEED: its actions, observations and events."""
+    env = ColorSortGymEnv("default", cameras=("sensor",), image_size=(64, 64), render_mode=None)
+    expert = ExpertPolicy()
+    obs, _ = env.reset(seed=SEED)
+    expert.reset(env, SEED)
+    actions, states = [], []
+    for _ in range(REPLAY_STEPS):
+        action = expert.act(obs)
+        obs, *_ = env.step(action)
+        actions.append(action)
+        states.append(obs["agent_pos"])
+    from colorsort.batched.spec import CellSpec
+
+    spec = CellSpec.from_env(env.env)
+    events = [(e.color, e.outcome.value, e.bin) for e in env.env.events]
+    env.close()
+    return spec, np.array(actions), np.array(states), events
+
+
+@pytest.mark.slow
+def test_the_batched_cell_carries_seals_and_bins_a_box_as_the_cpu_cell_does(replay):
+    """Three worlds on Warp's CPU device: world 0 replays the CPU cell's expert (its box rides the belt, is sealed
+    to the cup, lifted, let go and lands in the bin of its colour, as on the CPU); world 1 holds the arm (its box
+    moves at belt speed); world 2 is reset mid-run to another seed while the others run on."""
+    from colorsort.batched.cell import BatchedCell
+
+    spec, actions, states, events = replay
+    cell = BatchedCell(spec, get_variant("default"), 3, device="cpu", max_boxes=8)
+    out = cell.reset([SEED, SEED, SEED])
+    box_x = out.env_state.numpy()[:, 5]
+    assert np.allclose(box_x, spec.layout.spawn_x, atol=1e-6)
+    hold = np.r_[spec.qpos0[spec.arm_qpos], -1.0, -1.0]
+    sealed, lifted, xs = [], [], []
+    sealed_index = 2 * spec.n_joints + 7 + 1  # observation.state: joints, velocities, eef pose, then the flags
+    for k, action in enumerate(actions):
+        out = cell.step(np.stack([action, hold, hold]))
+        state, env_state = out.state.numpy(), out.env_state.numpy()
+        sealed.append(state[0, sealed_index])
+        lifted.append(env_state[0, 7] if env_state[0, -1] else np.nan)
+        xs.append(env_state[1, 5])
+        if k == 60:
+            before = cell.d.qpos.numpy()[0].copy()
+            out = cell.reset([SEED + 1], worlds=[2])
+            assert (cell.d.qpos.numpy()[0] == before).all()  # the other worlds do not notice
+            first = COLOR_NAMES[int(np.argmax(out.env_state.numpy()[2, :5]))]
+            assert first == COLOR_NAMES[episode_draws(get_variant("default"), SEED + 1, 1).color[0]]
+            assert out.env_state.numpy()[2, 5] == pytest.approx(spec.layout.spawn_x, abs=1e-6)
+    speed = (xs[5] - xs[15]) / (10 * cell.control_dt)
+    assert speed == pytest.approx(spec.config.belt_speed, rel=0.05)  # carried by the belt's friction
+    assert max(sealed) == 1.0 and sealed[-1] == 0.0  # sealed, then let go
+    belt_top = spec.layout.belt_top_z + spec.layout.box_size / 2
+    assert np.nanmax(lifted) > belt_top + 0.1  # the cup lifted the box
+    warp_events = [(COLOR_NAMES[c], list(Outcome)[o].value, BIN_COLORS[b] if b >= 0 else None)
+                   for _, _, c, o, b in cell.events(0)]
+    assert warp_events[:1] == events[:1] and warp_events[0][1] == "placed"  # into the bin of its colour
+    # the replay's joint states follow the CPU cell's (float32 physics, same controller): within a few mrad
+    assert np.abs(out.state.numpy()[0, : spec.n_joints] - states[-1][: spec.n_joints]).max() < 0.01
+
+
+@pytest.mark.slow
+def test_warp_backend_evaluation_gives_the_cpu_cells_episode_outcomes(tmp_path):
+    """`colorsort-eval --backend warp --device cpu` on 2 episodes of the shipped state policy: each episode ends as
+    on the CPU cell, with the same boxes, outcomes and bins."""
+    from colorsort.cli.eval import main
+
+    common = ["--policy", "baselines/act-state", "--variant", "default", "--episodes", "2", "--episode-length",
+              str(REPLAY_STEPS)]
+    assert main([*common, "--backend", "warp", "--device", "cpu", "--envs", "2", "--json",
+                 str(tmp_path / "warp.json")]) == 0
+    assert main([*common, "--json", str(tmp_path / "cpu.json")]) == 0
+    warp, cpu = (json.loads((tmp_path / f"{b}.json").read_text()) for b in ("warp", "cpu"))
+
+    def outcome(report):
+        return [(e["seed"], e["ended"], [(b["color"], b["outcome"], b["bin"]) for b in e["boxes"]])
+                for e in report["per_episode"]]
+
+    assert outcome(warp) == outcome(cpu)
+    assert sum(len(e["boxes"]) for e in warp["per_episode"]) >= 1  # a box was sorted in the horizon
+
+
+def test_the_default_install_path_never_imports_warp():
+    code = ("import sys, colorsort, colorsort.cli.eval, colorsort.benchmark.evaluate, colorsort.cli.baseline; "
+            "sys.exit('warp' in sys.modules or 'mujoco_warp' in sys.modules)")
+    assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--device", "cpu"], "--device: only --backend warp"),
+    (["--backend", "warp", "--report", "r"], "--backend warp writes --json, not --report"),
+])
+def test_warp_backend_arguments_are_checked(args, message, capsys):
+    from colorsort.cli.eval import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--policy", "expert", *args])
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_the_expert_is_refused_on_the_warp_backend_by_name():
+    from colorsort.batched.evaluate import BatchedPolicy
+
+    with pytest.raises(ValueError, match="the expert reads the sensor camera"):
+        BatchedPolicy("expert", "cpu", np.zeros(8), np.ones(8))
