@@ -82,6 +82,10 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
 	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
 	$(VENV)/bin/python benchmarks/bench_ci.py
+	$(VENV)/bin/python benchmarks/bench_render_parity.py
+	$(VENV)/bin/python benchmarks/bench_render_parity.py --variant lighting
+	$(VENV)/bin/python benchmarks/bench_warp_agreement.py --policy baselines/act-state --episodes 50 --episode-length 600
+	$(VENV)/bin/python benchmarks/bench_warp.py --device cpu --worlds 2,16 --steps 3 --render-worlds 2 --cpu-procs 2 --cold
 
 # a learned baseline: demos, lerobot-train, colorsort-eval, learning curve (`make baseline RECIPE=camera-tracking`;
 # `colorsort-baseline --list` names the recipes); about 1.5 h a recipe on 2 CPU cores

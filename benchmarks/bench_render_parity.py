@@ -1,6 +1,6 @@
 """How differently MuJoCo Warp's renderer and MuJoCo's OpenGL renderer draw the same states of the cell.
 
-    python benchmarks/bench_render_parity.py --out docs/results/render_parity.md
+    python benchmarks/bench_render_parity.py
 
 The CPU cell runs the scripted expert on a few seeds; at fixed steps (a box on the belt, under the
 sensor, in the cup, over a bin) its state is saved and its cameras rendered by OpenGL. The batched
@@ -18,8 +18,15 @@ from pathlib import Path
 
 import numpy as np
 
+from colorsort.results import recorded
+
 
 def main() -> int:
+    with recorded(__file__):
+        return run()
+
+
+def run() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--variant", default="default")
     parser.add_argument("--seeds", default="10000,10001")
@@ -27,7 +34,6 @@ def main() -> int:
     parser.add_argument("--cameras", default="scene,sensor,wrist")
     parser.add_argument("--image-size", type=int, default=64)
     parser.add_argument("--device", default="cpu", help="Warp's device")
-    parser.add_argument("--out", default=None, help="write the Markdown table here")
     parser.add_argument("--png", default=None, help="write the image pairs here")
     args = parser.parse_args()
 
@@ -88,17 +94,13 @@ def main() -> int:
         scaled = ratio * cpu_img.mean()
         rows.append((c, mad, scaled, cpu_img.mean(), warp_img.mean()))
         pairs.append(np.concatenate([np.concatenate([a, b], 1) for a, b in zip(cpu_img, warp_img, strict=True)], 0))
-    lines = ["# Render parity: MuJoCo Warp against MuJoCo's OpenGL renderer", "",
-             f"Written by `python {' '.join(sys.argv)}`: {n} states of `{args.variant}` (seeds {args.seeds}, "
-             f"control steps {args.steps} of the scripted expert), {args.image_size} px, Warp device `{args.device}`.",
+    lines = [f"Render parity, MuJoCo Warp against MuJoCo's OpenGL renderer: {n} states of `{args.variant}` (seeds "
+             f"{args.seeds}, control steps {args.steps} of the scripted expert), {args.image_size} px, Warp device "
+             f"`{args.device}`.",
              "", "| camera | mean abs. difference [0-255] | after matching brightness | OpenGL mean | Warp mean |",
              "| --- | --- | --- | --- | --- |"]
     lines += [f"| {c} | {mad:.1f} | {scaled:.1f} | {a:.1f} | {b:.1f} |" for c, mad, scaled, a, b in rows]
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if args.out:
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.out).write_text(text)
+    print("\n".join(lines))
     if args.png:
         import cv2
 

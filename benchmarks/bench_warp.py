@@ -2,7 +2,7 @@
 
 Run on a machine with a CUDA GPU and the ``gpu`` extra (``pip install -e ".[gpu]"``)::
 
-    python benchmarks/bench_warp.py --out docs/results/bench_warp.md
+    python benchmarks/bench_warp.py --policy baselines/act-state
 
 It measures, in one process on one machine:
 - the first build of the batched cell (Warp's kernel compile, cached afterwards under ~/.cache/warp);
@@ -13,7 +13,7 @@ It measures, in one process on one machine:
   only, no rules and no controller, an upper bound on what the CPU cell steps;
 - a state policy evaluated on the batched cell (``--policy``), ``N`` episodes in one wave of ``N``
   worlds: episodes per minute and the success rate with its 95% interval.
-Figures go to stdout and, with ``--out``, to a Markdown file with the command that wrote it.
+Figures go to stdout and to ``docs/results/bench_warp_<arguments>.md`` (``colorsort.results``).
 """
 
 from __future__ import annotations
@@ -26,6 +26,8 @@ import platform
 import sys
 import time
 from pathlib import Path
+
+from colorsort.results import recorded
 
 
 def cpu_steps(args: tuple[str, int]) -> float:
@@ -44,6 +46,11 @@ def cpu_steps(args: tuple[str, int]) -> float:
 
 
 def main() -> int:
+    with recorded(__file__):
+        return run()
+
+
+def run() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--spec", default=None, help="a saved CellSpec folder (default: build the variant's cell)")
     parser.add_argument("--variant", default="default")
@@ -58,19 +65,25 @@ def main() -> int:
     parser.add_argument("--image-size", type=int, default=64, help="their size [px]")
     parser.add_argument("--cpu-procs", type=int, default=os.cpu_count(), help="processes for the CPU reference")
     parser.add_argument("--cpu-steps", type=int, default=3000)
-    parser.add_argument("--out", default=None, help="write the Markdown table here")
     parser.add_argument("--json", default=None, help="write the figures as JSON here")
+    parser.add_argument("--cold", action="store_true",
+                        help="compile into an empty kernel cache, so that the first build is a cold compile")
     args = parser.parse_args()
 
     import numpy as np
     import torch
     import warp as wp
 
+    wp.config.quiet = True
+    if args.cold:  # before Warp initialises (MuJoCo Warp's import does)
+        import tempfile
+
+        wp.config.kernel_cache_dir = tempfile.mkdtemp(prefix="warp-cold-")
+
     from colorsort.batched.cell import BatchedCell
     from colorsort.batched.spec import CellSpec, spec_for_variant
     from colorsort.variants import get_variant
 
-    wp.config.quiet = True
     variant = get_variant(args.variant)
     if args.spec is None:
         args.spec = str(spec_for_variant(variant.name).save(Path("outputs") / "cellspec" / variant.name))
@@ -140,21 +153,18 @@ def main() -> int:
                                    | {"outcomes": [b["outcome"] for b in e["boxes"]]} for e in report.per_episode]}
             figures["policy"][n] = row
             print(f"policy {n}: { {k: v for k, v in row.items() if k != 'per_episode'} }", flush=True)
-    table = markdown(figures, args)
-    print(table)
-    if args.out:
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.out).write_text(table)
+    print(markdown(figures, args))
     if args.json:
         Path(args.json).write_text(json.dumps(figures, indent=1, default=str))
     return 0
 
 
 def markdown(f: dict, args) -> str:
-    lines = [f"# The batched cell on MuJoCo Warp: {f['device']}", "",
-             f"Written by `python {' '.join(sys.argv)}`; variant `{f['variant']}`, {f['substeps']} physics "
+    cache = "a cold compile into an empty kernel cache" if args.cold else "with the kernel cache as it was"
+    lines = [f"The batched cell on MuJoCo Warp: {f['device']}; variant `{f['variant']}`, {f['substeps']} physics "
              "steps per control step.", "",
-             f"First build (Warp's kernel compile, then cached): {f.get('first_build_s', float('nan')):.0f} s.", "",
+             f"First build ({cache}): "
+             f"{f.get('first_build_s', float('nan')):.0f} s.", "",
              "| worlds | control step [ms] | control steps/s | physics steps/s | x CPU (all processes) |",
              "| --- | --- | --- | --- | --- |"]
     cpu = f["cpu"]["steps_per_s"]

@@ -8,8 +8,11 @@ The rule kernels are held to their Python twins on their own inputs, where physi
 from __future__ import annotations
 
 import json
+import os
+import shlex
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -163,15 +166,17 @@ def test_the_batched_cell_carries_seals_and_bins_a_box_as_the_cpu_cell_does(repl
 
 @pytest.mark.slow
 def test_warp_backend_evaluation_gives_the_cpu_cells_episode_outcomes(tmp_path):
-    """`colorsort-eval --backend warp --device cpu` on 2 episodes of the shipped state policy: each episode ends as
-    on the CPU cell, with the same boxes, outcomes and bins."""
+    """docs/gpu.md's `colorsort-eval --backend warp --device cpu` command, as written, on the shipped state policy:
+    each of its 2 episodes ends as on the CPU cell, with the same boxes, outcomes and bins."""
     from colorsort.cli.eval import main
 
-    common = ["--policy", "baselines/act-state", "--variant", "default", "--episodes", "2", "--episode-length",
-              str(REPLAY_STEPS)]
-    assert main([*common, "--backend", "warp", "--device", "cpu", "--envs", "2", "--json",
-                 str(tmp_path / "warp.json")]) == 0
-    assert main([*common, "--json", str(tmp_path / "cpu.json")]) == 0
+    page = (Path(__file__).resolve().parents[1] / "docs" / "gpu.md").read_text()
+    (command,) = [line for line in page.splitlines() if line.startswith("colorsort-eval") and "--device cpu" in line]
+    argv = shlex.split(command)[1:]
+    assert main([*argv, "--json", str(tmp_path / "warp.json")]) == 0
+    backend = argv.index("--backend")
+    cpu = [a for i, a in enumerate(argv) if i not in (backend, backend + 1) and a not in ("--device", "cpu")]
+    assert main([*cpu, "--json", str(tmp_path / "cpu.json")]) == 0
     warp, cpu = (json.loads((tmp_path / f"{b}.json").read_text()) for b in ("warp", "cpu"))
 
     def outcome(report):
@@ -206,3 +211,49 @@ def test_the_expert_is_refused_on_the_warp_backend_by_name():
 
     with pytest.raises(ValueError, match="the expert reads the sensor camera"):
         BatchedPolicy("expert", "cpu", np.zeros(8), np.ones(8))
+
+
+def test_gymnasium_make_vec_steps_the_batched_cell_and_resets_finished_envs_in_the_same_step():
+    """`gym.make_vec(..., vectorization_mode="vector_entry_point")`: the CPU env's spaces, boxes riding the belt,
+    and an episode that ends (here at its step limit) starts again in the same step with the env's next seed."""
+    import gymnasium as gym
+
+    envs = gym.make_vec("colorsort/ColorSort-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                        device="cpu", episode_length=3)
+    try:
+        obs, info = envs.reset(seed=SEED)
+        assert envs.observation_space.contains(obs)
+        assert envs.call("_max_episode_steps") == (3, 3)
+        spec = envs.unwrapped.cell.spec
+        hold = np.tile(np.r_[spec.qpos0[spec.arm_qpos], -1.0, -1.0], (2, 1)).astype(np.float32)
+        for _ in range(2):
+            obs, reward, terminated, truncated, info = envs.step(hold)
+            assert not (terminated | truncated).any()
+        assert (obs["environment_state"][:, 5] < spec.layout.spawn_x - 0.005).all()  # the boxes ride the belt
+        obs, reward, terminated, truncated, info = envs.step(hold)
+        assert truncated.all() and not terminated.any()
+        assert (info["final_obs"]["environment_state"][:, 5] < spec.layout.spawn_x - 0.005).all()
+        np.testing.assert_allclose(obs["environment_state"][:, 5], spec.layout.spawn_x, atol=1e-6)  # a new episode
+        first = [COLOR_NAMES[episode_draws(get_variant("default"), s, 1).color[0]] for s in (SEED + 2, SEED + 3)]
+        assert [COLOR_NAMES[int(np.argmax(e[:5]))] for e in obs["environment_state"]] == first
+    finally:
+        envs.close()
+
+
+@pytest.mark.slow
+def test_lerobot_eval_runs_on_the_batched_cell_as_documented(tmp_path):
+    """docs/gpu.md's lerobot-eval command, as written (from a folder holding the shipped baselines): LeRobot's
+    evaluator steps its envs as one batched cell, scores the episodes and films them."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "gpu.md").read_text().replace("\\\n", " ")
+    (line,) = [line for line in page.splitlines() if "lerobot-eval" in line and "--env.backend=warp" in line]
+    argv = shlex.split(line)
+    assert argv[0] == "HF_HUB_OFFLINE=1"
+    (tmp_path / "baselines").symlink_to(Path(__file__).resolve().parents[1] / "baselines")
+    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
+    done = subprocess.run([str(Path(sys.executable).parent / argv[1]), *argv[2:]], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    (info,) = (tmp_path / "outputs" / "eval").rglob("eval_info.json")
+    overall = json.loads(info.read_text())["overall"]
+    assert overall["n_episodes"] == 2
+    assert all((tmp_path / p).stat().st_size > 1000 for p in overall["video_paths"])

@@ -7,6 +7,9 @@ steps, MuJoCo's first half-step (``step1``), the joint servo at its own rate, th
 belt and the seal, then the second half-step (``step2``); then the referee, the spawner, a forward pass
 and the observations. On a CUDA device the whole control step is one captured CUDA graph.
 
+Each world's scene lights follow its episode's ``Lighting`` (``lighting.LightRig``); the headlight is the
+same in every world (Warp's renderer compiles it in), at the cell's own dim setting.
+
 Observations and actions are torch tensors on the cell's device (``observation.state`` and
 ``observation.environment_state``, as the LeRobot datasets name them).
 """
@@ -14,6 +17,7 @@ Observations and actions are torch tensors on the cell's device (``observation.s
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import mujoco_warp as mjw
@@ -37,9 +41,9 @@ CONSTRAINTS_PER_WORLD = 256
 class StepResult:
     """What a control step returns, one row per world (torch tensors on the cell's device)."""
 
-    state: object  # (N, state size) float32: observation.state
-    env_state: object  # (N, 13) float32: observation.environment_state
-    reward: object  # (N,) float32: the sparse reward of the step
+    state: Any  # torch (N, state size) float32: observation.state
+    env_state: Any  # torch (N, 13) float32: observation.environment_state
+    reward: Any  # torch (N,) float32: the sparse reward of the step
     images: dict  # camera -> (N, H, W, 3) uint8 RGB, right side up; empty without cameras
 
 
@@ -93,6 +97,11 @@ class BatchedCell:
             self.m.eq_data = wp.array(np.repeat(m.eq_data[None].astype(np.float32), n, 0), dtype=mjw._src.types.vec11)
             self.m.body_gravcomp = wp.array(np.repeat(m.body_gravcomp[None].astype(np.float32), n, 0), dtype=float)
             self.m.geom_rgba = wp.array(np.repeat(m.geom_rgba[None].astype(np.float32), n, 0), dtype=wp.vec4)
+            self._lights: dict[str, Any] = {}  # the scene lights as built; a world's scaled by its episode's lights
+            for name in ("light_diffuse", "light_ambient", "light_specular"):
+                base = getattr(m, name).astype(np.float32)
+                setattr(self.m, name, wp.array(np.repeat(base[None], n, 0), dtype=wp.vec3))
+                self._lights[name] = torch.as_tensor(base, device=self.torch_device)
             i32 = lambda a: wp.array(np.asarray(a, np.int32), dtype=int)  # noqa: E731
             f32 = lambda a: wp.array(np.asarray(a, np.float32), dtype=float)  # noqa: E731
             self.arm_qpos, self.arm_dof, self.arm_act = i32(s.arm_qpos), i32(s.arm_dof), i32(s.arm_actuators)
@@ -153,9 +162,11 @@ class BatchedCell:
             "bins_emptied", "n_events", "held", "suction_cmd", "belt_pass", "travel", "running", "detected",
             "draw_color", "draw_offset", "draw_yaw", "grips", "goal")}
         colors, offsets, yaws = (np.zeros((len(idx), self.max_boxes), dt) for dt in (np.int32, np.float32, np.float32))
+        light_scale = np.ones((len(idx), 3), np.float32)
         for row, seed in enumerate(seeds):
             draws = episode_draws(self.variant, int(seed), self.max_boxes)
             colors[row], offsets[row], yaws[row] = draws.color, draws.offset, draws.yaw
+            light_scale[row] = draws.lighting.brightness * np.asarray(draws.lighting.tint)
         dev = self.torch_device
         at = torch.as_tensor(idx, device=dev)
         t["draw_color"][at] = torch.as_tensor(colors, device=dev)
@@ -177,6 +188,9 @@ class BatchedCell:
             q, q0 = wp.to_torch(self.d.qpos), wp.to_torch(self.qpos0)
             q[at] = q0[at]
             wp.to_torch(self.d.eq_active)[at] = False
+            scale = torch.as_tensor(light_scale, device=dev)[:, None, :]  # lighting.LightRig.apply, per world
+            for name, base in self._lights.items():
+                wp.to_torch(getattr(self.m, name))[at] = base[None] * scale
             gc = wp.to_torch(self.m.body_gravcomp)
             gc[at[:, None], torch.as_tensor(self.spec.box_body, device=dev)[None]] = 1.0
             t["goal"][at] = torch.as_tensor(self.spec.qpos0[self.spec.arm_qpos], dtype=torch.float32, device=dev)

@@ -16,7 +16,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from colorsort.config import COLORS, CellLayout, TaskConfig
+from colorsort.config import COLORS, CellLayout, Lighting, TaskConfig
 
 # Parked boxes wait here on the batched cell [m]: MuJoCo Warp's collision filters (contype) are shared by
 # every world, so a parked box stays collidable; in the air, spaced out and far from the cell, it touches
@@ -101,6 +101,7 @@ class CellSpec:
     def from_env(cls, env) -> CellSpec:
         """The spec of a built (and reset) ``ColorSort`` env; copies its model."""
         model = copy_model(env.mj_model)
+        env.plant.lights.apply(Lighting(), model)  # the cell's own lights: each world scales them (cell.py)
         robot = env.robots[0]
         arm = robot.part_controllers["right"]
         gripper = robot.part_controllers["right_gripper"]

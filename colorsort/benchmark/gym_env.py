@@ -174,5 +174,8 @@ def register_envs() -> None:
     ids = gym_ids()
     for gym_id, name in ids.items():
         if gym_id not in gym.registry:
+            # gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", device=...) runs the batched cell
+            # (MuJoCo Warp, the gpu extra; imported only then)
             gym.register(id=gym_id, entry_point="colorsort.benchmark.gym_env:ColorSortGymEnv", kwargs={"variant": name},
-                         disable_env_checker=True)
+                         disable_env_checker=True,
+                         vector_entry_point="colorsort.batched.vector_env:BatchedVectorEnv")

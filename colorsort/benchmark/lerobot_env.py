@@ -11,6 +11,8 @@ installs the plugin distribution ``lerobot_env_colorsort``, which LeRobot's CLIs
 ``--env.task`` is a Gymnasium id without the ``colorsort/`` namespace (``ColorSort-v0`` or a
 variant's, see ``colorsort-eval --list``); ``--env.cameras`` and ``--env.image_size`` must match
 the dataset the policy was trained on (``--env.cameras=none`` for a state-only policy).
+``--env.backend=warp`` runs the ``--eval.batch_size`` envs as one batched cell on MuJoCo Warp
+(``--env.device``, cuda:0 by default; the ``gpu`` extra; docs/gpu.md).
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from colorsort.robots import ROBOTS
 from colorsort.variants import Variant, get_variant, gym_ids
 
 NAMESPACE = "colorsort"
+BACKENDS = ("cpu", "warp")
 
 
 def variant_of_task(task: str) -> Variant:
@@ -50,12 +53,16 @@ class ColorSortEnv(EnvConfig):
     cameras: str = ",".join(DEFAULT_CAMERAS)  # comma-separated, as colorsort-collect --cameras records; "none"
     image_size: int = DEFAULT_IMAGE_SIZE[0]  # square camera images [px]
     episode_length: int | None = None  # steps before truncation; default: the variant's time limit
+    backend: str = "cpu"  # "cpu": one ColorSortGymEnv per env; "warp": one batched cell (colorsort.batched)
+    device: str = "cuda:0"  # the batched cell's Warp device (backend warp): cuda:0, or cpu
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.task is None:
             raise ConfigError("--env.task: give a ColorSort task, e.g. ColorSort-Default-v0 (colorsort-eval --list)")
+        if self.backend not in BACKENDS:
+            raise ConfigError(f"--env.backend={self.backend!r}; valid backends: {list(BACKENDS)}")
         variant = variant_of_task(self.task)
         n = ROBOTS[variant.robot].n_joints
         self.features = {
@@ -82,6 +89,16 @@ class ColorSortEnv(EnvConfig):
     @property
     def gym_id(self) -> str:
         return f"{NAMESPACE}/{self.task}"
+
+    def create_envs(self, n_envs: int, use_async_envs: bool = False) -> dict:
+        """LeRobot's ``{suite: {task index: VectorEnv}}``; with ``backend`` warp, one batched cell of ``n_envs``."""
+        if self.backend == "cpu":
+            return super().create_envs(n_envs, use_async_envs)
+        import gymnasium as gym
+
+        env = gym.make_vec(self.gym_id, num_envs=n_envs, vectorization_mode="vector_entry_point", device=self.device,
+                           render_mode="rgb_array", **self.gym_kwargs)  # the registry's entry point: no import here
+        return {NAMESPACE: {0: env}}
 
     @property
     def gym_kwargs(self) -> dict:

@@ -36,9 +36,10 @@ class LightRig:
         h = model.vis.headlight
         self._head = (h.ambient.copy(), h.diffuse.copy(), h.specular.copy())
 
-    def apply(self, lighting: Lighting) -> None:
+    def apply(self, lighting: Lighting, model: mujoco.MjModel | None = None) -> None:
+        """Set the lights to ``lighting``: those of this rig's model, or of ``model`` (a copy of it)."""
         scale = lighting.brightness * np.asarray(lighting.tint)
-        m = self.model
+        m = self.model if model is None else model
         m.light_diffuse[:] = self._diffuse * scale
         m.light_ambient[:] = self._ambient * scale
         m.light_specular[:] = self._specular * scale
