@@ -1,7 +1,7 @@
 """The batched cell on MuJoCo Warp (``colorsort.batched``), on Warp's CPU device: CI has no GPU.
 
-Warp compiles MuJoCo Warp's kernels once per machine (about four minutes on 2 cores, then cached under
-~/.cache/warp); the physics tests share one cell per module so that the compile happens once per run.
+Warp compiles MuJoCo Warp's kernels once per machine (minutes on 2 cores: docs/gpu.md) into its disk cache
+(~/.cache/warp), so only the first cell a run builds pays for it; each test then builds its own few worlds.
 The rule kernels are held to their Python twins on their own inputs, where physics is not the point.
 """
 
@@ -257,3 +257,31 @@ def test_lerobot_eval_runs_on_the_batched_cell_as_documented(tmp_path):
     overall = json.loads(info.read_text())["overall"]
     assert overall["n_episodes"] == 2
     assert all((tmp_path / p).stat().st_size > 1000 for p in overall["video_paths"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", ["tracking-fast", "robots-panda"])
+def test_other_belts_and_robots_run_on_the_batched_cell(variant):
+    """A tracking belt (its encoder in observation.state) and a 7-joint arm: the boxes ride the belt at the
+    variant's speed, the observation has the CPU env's size, and the held arm stays at home."""
+    from colorsort.batched.cell import BatchedCell
+    from colorsort.batched.spec import spec_for_variant
+
+    v = get_variant(variant)
+    spec = spec_for_variant(variant)
+    cell = BatchedCell(spec, v, 2, device="cpu", max_boxes=8)
+    out = cell.reset([SEED, SEED + 1])
+    single = ColorSortGymEnv(variant, cameras=(), render_mode=None)
+    assert out.state.shape == (2, single.observation_space["agent_pos"].shape[0])
+    hold = np.tile(np.r_[spec.qpos0[spec.arm_qpos], -1.0, -1.0], (2, 1))
+    xs = []
+    for _ in range(12):
+        out = cell.step(hold)
+        xs.append(out.env_state.numpy()[:, 5].copy())  # the cell's buffer: the next step overwrites it
+    speed = (xs[2] - xs[-1]) / (9 * cell.control_dt)
+    np.testing.assert_allclose(speed, v.task_config.belt_speed, rtol=0.05)
+    np.testing.assert_allclose(out.state.numpy()[:, : spec.n_joints], np.tile(spec.qpos0[spec.arm_qpos], (2, 1)),
+                               atol=0.01)
+    if v.task_config.tracking:  # the encoder: the belt never stopped
+        np.testing.assert_allclose(out.state.numpy()[:, -1], 12 * cell.control_dt * v.task_config.belt_speed,
+                                   rtol=1e-4)

@@ -39,7 +39,8 @@ CONSTRAINTS_PER_WORLD = 256
 
 @dataclass(frozen=True)
 class StepResult:
-    """What a control step returns, one row per world (torch tensors on the cell's device)."""
+    """What a control step returns, one row per world: torch tensors on the cell's device that view the cell's
+    buffers (the next step or reset overwrites them: clone what you keep)."""
 
     state: Any  # torch (N, state size) float32: observation.state
     env_state: Any  # torch (N, 13) float32: observation.environment_state
