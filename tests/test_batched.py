@@ -213,6 +213,7 @@ def test_the_expert_is_refused_on_the_warp_backend_by_name():
         BatchedPolicy("expert", "cpu", np.zeros(8), np.ones(8))
 
 
+@pytest.mark.slow
 def test_gymnasium_make_vec_steps_the_batched_cell_and_resets_finished_envs_in_the_same_step():
     """`gym.make_vec(..., vectorization_mode="vector_entry_point")`: the CPU env's spaces, boxes riding the belt,
     and an episode that ends (here at its step limit) starts again in the same step with the env's next seed."""
