@@ -7,7 +7,8 @@ Clones the checkout's committed HEAD twice into a temporary folder (``git clone`
 runs each command there as CI and a new user would, and prints each one's wall time, exit status and pytest's
 summary line. The package caches of this machine (pip's, uv's) are as they are: on a machine that has never
 downloaded the stack, add the downloads. Warp's kernel cache starts empty (``WARP_CACHE_PATH`` a new folder
-inside the run), as on a fresh machine: the batched cell's tests compile MuJoCo Warp's kernels. The suite's time is what the issue's 12-minute budget is held to.
+inside the run), as on a fresh machine: the batched cell's tests compile MuJoCo Warp's kernels. The suite's time
+is what the issue's 12-minute budget is held to.
 """
 
 from __future__ import annotations
