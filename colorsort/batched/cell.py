@@ -31,6 +31,7 @@ from colorsort.batched.spec import CellSpec, copy_model, park_position
 from colorsort.cell.referee import SETTLED_SPEED
 from colorsort.cell.suction import SEAL_ANGLE_DEG
 from colorsort.config import COLORS, CellLayout
+from colorsort.errors import ActionError, ConfigError
 from colorsort.variants import Variant
 
 CONTACTS_PER_WORLD = 48  # the cell has about 13 contacts with a box in the cup; room for a pile in a bin
@@ -156,7 +157,7 @@ class BatchedCell:
         idx = np.arange(self.worlds) if worlds is None else np.asarray(worlds, int)
         seeds = np.asarray(seeds, np.int64)
         if len(seeds) != len(idx):
-            raise ValueError(f"{len(seeds)} seeds for {len(idx)} worlds")
+            raise ConfigError(f"{len(seeds)} seeds for {len(idx)} worlds")
         self.seeds[idx] = seeds
         t = {name: wp.to_torch(getattr(self, name)) for name in (
             "status", "color", "bin_of", "serial", "now", "next_time", "steps", "next_serial", "spawned",
@@ -212,10 +213,10 @@ class BatchedCell:
 
         action = torch.as_tensor(action, dtype=torch.float32, device=self.torch_device)
         if action.shape != (self.worlds, self.spec.n_joints + 2):
-            raise ValueError(f"expected actions of shape ({self.worlds}, {self.spec.n_joints + 2}), "
+            raise ActionError(f"expected actions of shape ({self.worlds}, {self.spec.n_joints + 2}), "
                              f"got {tuple(action.shape)}")
         if not torch.isfinite(action).all():
-            raise ValueError("actions must be finite")
+            raise ActionError("actions must be finite")
         wp.to_torch(self.action).copy_(action)
         self._sync()
         if self.device.is_cuda and self.use_graph:
@@ -299,10 +300,38 @@ class BatchedCell:
         return StepResult(wp.to_torch(self.state), wp.to_torch(self.env_state), wp.to_torch(self.reward), self.images)
 
     # ------------------------------------------------------------------ reading worlds
+    def record(self) -> Record:
+        """Every world's episode so far, copied to the host in one go."""
+        return Record(self.seeds.copy(), self.n_events.numpy(), self.ev_time.numpy(), self.ev_serial.numpy(),
+                      self.ev_color.numpy(), self.ev_outcome.numpy(), self.ev_bin.numpy(), self.grips.numpy(),
+                      self.draw_offset.numpy(), self.draw_yaw.numpy())
+
     def events(self, world: int) -> list[tuple[float, int, int, int, int]]:
-        """World ``world``'s boxes that left play this episode, in order: (time [s], serial, colour index,
-        outcome index, bin index or -1)."""
-        k = min(int(self.n_events.numpy()[world]), self.max_boxes)
-        cols = (self.ev_time, self.ev_serial, self.ev_color, self.ev_outcome, self.ev_bin)
-        rows = [c.numpy()[world, :k] for c in cols]
-        return [(float(t), int(s), int(c), int(o), int(b)) for t, s, c, o, b in zip(*rows, strict=True)]
+        """World ``world``'s boxes that left play this episode (``Record.events``)."""
+        return self.record().events(world)
+
+
+@dataclass(frozen=True)
+class Record:
+    """The worlds' episodes on the host (numpy, a row per world): seeds, boxes that left play (time [s], serial,
+    colour, outcome and bin indices, in order), each serial's grip (offset [m], yaw [deg]; NaN if never sealed)
+    and draws (offset [m], yaw [rad])."""
+
+    seeds: np.ndarray
+    n_events: np.ndarray
+    time: np.ndarray
+    serial: np.ndarray
+    color: np.ndarray
+    outcome: np.ndarray
+    bin: np.ndarray
+    grips: np.ndarray
+    offset: np.ndarray
+    yaw: np.ndarray
+
+    def events(self, world: int) -> list[tuple[float, int, int, int, int]]:
+        """World ``world``'s boxes that left play, in order: (time [s], serial, colour index, outcome index,
+        bin index or -1)."""
+        k = min(int(self.n_events[world]), self.time.shape[1])
+        rows = (self.time, self.serial, self.color, self.outcome, self.bin)
+        return [(float(t), int(s), int(c), int(o), int(b)) for t, s, c, o, b in zip(*(r[world, :k] for r in rows),
+                                                                                      strict=True)]

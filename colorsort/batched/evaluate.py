@@ -16,9 +16,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import warp as wp
 from tqdm import tqdm
 
+from colorsort.batched.cell import BatchedCell, Record
 from colorsort.batched.spec import CellSpec, spec_for_variant
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras
@@ -90,17 +90,25 @@ class BatchedPolicy:
             return self.postprocessor(self.policy.select_action(self.preprocessor(batch)))
 
 
-def episode_result(cell, world: int, variant: Variant, steps: int, sim_time: float) -> dict:
+def tally(n_events: np.ndarray, outcome: np.ndarray, boxes: int) -> dict[str, np.ndarray]:
+    """Each world's counts over the first ``boxes`` boxes that left play (``referee.judge`` and
+    ``ColorSortGymEnv``'s ``info``): done, success, failed, and a count per ``Outcome``, a row per world."""
+    counted = np.arange(boxes)[None] < np.minimum(n_events, boxes)[:, None]
+    count = {o: ((outcome[:, :boxes] == OUTCOMES.index(o)) & counted).sum(1) for o in Outcome}
+    failed = count[Outcome.MISPLACED] + count[Outcome.DROPPED] > 0
+    done = n_events >= boxes
+    return {"done": done, "success": done & ~failed, "failed": failed, **{o.value: c for o, c in count.items()}}
+
+
+def episode_result(record: Record, world: int, variant: Variant, steps: int, sim_time: float) -> dict:
     """World ``world``'s episode as ``EpisodeRunner.episode`` reports it (``boxes``: the first ``variant.boxes``)."""
-    events = cell.events(world)[: variant.boxes]
+    events = record.events(world)[: variant.boxes]
     outcomes = [OUTCOMES[o] for _, _, _, o, _ in events]
     wrong = [o for o in outcomes if not o.handled_right]
     done = len(events) >= variant.boxes
     success = done and not wrong
     ended = "success" if success else "failed" if wrong else "time limit"
-    grips = cell.grips.numpy()[world]
-    offsets = cell.draw_offset.numpy()[world]
-    yaws = cell.draw_yaw.numpy()[world]
+    grips, offsets, yaws = record.grips[world], record.offset[world], record.yaw[world]
     boxes = []
     for t, serial, color, outcome, b in events:
         grip = grips[serial] if serial < len(grips) else (math.nan, math.nan)
@@ -110,7 +118,7 @@ def episode_result(cell, world: int, variant: Variant, steps: int, sim_time: flo
                       "grip_offset": None if math.isnan(grip[0]) else round(float(grip[0]), 4),
                       "grip_yaw": None if math.isnan(grip[1]) else round(float(grip[1]), 2)})
     count = {o: sum(x is o for x in outcomes) for o in Outcome}
-    return {"seed": int(cell.seeds[world]), "success": success, "ended": ended, "steps": steps,
+    return {"seed": int(record.seeds[world]), "success": success, "ended": ended, "steps": steps,
             "correct": count[Outcome.PLACED], "misplaced": count[Outcome.MISPLACED],
             "dropped": count[Outcome.DROPPED], "let_through": count[Outcome.REJECTED],
             "distractors": sum(is_distractor(COLOR_NAMES[c]) for _, _, c, _, _ in events), "sim_time": sim_time,
@@ -118,17 +126,14 @@ def episode_result(cell, world: int, variant: Variant, steps: int, sim_time: flo
             "boxes": boxes}
 
 
-def run_waves(cell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
+def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
               progress: bool = True) -> tuple[list[dict], WaveTiming]:
     """Every seed's episode, in waves of ``cell.worlds``; results in seed order."""
-    import torch
-
     n = cell.worlds
     task = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours."
     results: list[dict] = []
     bar = tqdm(total=len(seeds), desc=f"{policy.name} on {variant.name} (warp)", unit="episode", disable=not progress)
     start, control_steps = time.perf_counter(), 0
-    handled_right = torch.tensor([o.handled_right for o in OUTCOMES], device=cell.torch_device)
     for first in range(0, len(seeds), n):
         wave = seeds[first : first + n]
         padded = wave + [wave[-1]] * (n - len(wave))  # idle worlds repeat a seed; their results are dropped
@@ -140,14 +145,14 @@ def run_waves(cell, policy: BatchedPolicy, variant: Variant, seeds: list[int], m
         for step in range(1, max_steps + 1):
             out = cell.step(policy.act(out, task))
             control_steps += 1
-            k = torch.clamp(wp.to_torch(cell.n_events), max=variant.boxes)
-            outcome = wp.to_torch(cell.ev_outcome)[:, : variant.boxes]
-            counted = torch.arange(variant.boxes, device=cell.torch_device)[None] < k[:, None]
-            wrong = (counted & ~handled_right[outcome.clamp(min=0)]).any(1)
-            stop = (wrong | (k >= variant.boxes)).cpu().numpy() | (step >= max_steps)
-            for w in np.flatnonzero(stop & ~ended):
-                finished[int(w)] = episode_result(cell, int(w), variant, step, step * cell.control_dt)
-                bar.update()
+            counts = tally(cell.n_events.numpy(), cell.ev_outcome.numpy(), variant.boxes)
+            stop = counts["done"] | counts["failed"] | (step >= max_steps)
+            new = np.flatnonzero(stop & ~ended)
+            if len(new):
+                record = cell.record()  # one copy to the host for every world that ended now
+                for w in new:
+                    finished[int(w)] = episode_result(record, int(w), variant, step, step * cell.control_dt)
+                bar.update(len(new))
             ended |= stop
             if ended.all():
                 break
@@ -162,7 +167,6 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
     """``episodes`` episodes of a policy on one variant, ``envs`` worlds at once on Warp's ``device``
     ("cpu" or "cuda:0"); the report is ``metrics.aggregate``'s, as for the CPU cell. ``spec`` saves
     building the variant's cell with robosuite (``CellSpec.load``)."""
-    from colorsort.batched.cell import BatchedCell
     from colorsort.benchmark.evaluate import episode_seeds
 
     if envs < 1:
@@ -170,9 +174,8 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
     variant = get_variant(variant_name)
     seeds = episode_seeds(variant, episodes, seed)
     spec = spec or spec_for_variant(variant.name)
-    torch_device = "cpu" if device == "cpu" else device
     policy = BatchedPolicy(policy_spec if policy_spec in ("expert", "random") else str(Path(policy_spec).resolve()),
-                           torch_device, spec.action_low, spec.action_high)
+                           device, spec.action_low, spec.action_high)
     max_steps = episode_length or int(np.ceil(variant.time_limit * spec.control_freq))
     spawns = int(np.ceil(max_steps / spec.control_freq / variant.task_config.spawn_period)) + 2
     cell = BatchedCell(spec, variant, min(envs, len(seeds)), device=device, max_boxes=max(variant.boxes + 2, spawns),

@@ -16,7 +16,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from colorsort.config import COLORS, CellLayout, Lighting, TaskConfig
+from colorsort.config import CellLayout, Lighting, TaskConfig
 
 # Parked boxes wait here on the batched cell [m]: MuJoCo Warp's collision filters (contype) are shared by
 # every world, so a parked box stays collidable; in the air, spaced out and far from the cell, it touches
@@ -111,7 +111,6 @@ class CellSpec:
             model.geom_contype[geom] = model.geom_conaffinity[geom] = 1
             model.body_contype[body] = model.body_conaffinity[body] = 1
             model.body_gravcomp[body] = 1.0
-            model.geom_rgba[geom] = COLORS["red"]
         qpos0 = env.mj_data.qpos.copy()
         qvel0 = np.zeros(model.nv)
         for i, qa in enumerate(pool.qpos):

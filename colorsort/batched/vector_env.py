@@ -23,7 +23,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from colorsort.batched.cell import BatchedCell, StepResult
-from colorsort.batched.evaluate import OUTCOMES
+from colorsort.batched.evaluate import tally
 from colorsort.batched.spec import CellSpec, spec_for_variant
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.cell.cameras import DEFAULT_IMAGE_SIZE
@@ -138,14 +138,9 @@ class BatchedVectorEnv(gym.vector.VectorEnv):
 
     def _info(self) -> dict[str, np.ndarray]:
         """``ColorSortGymEnv``'s counters, one row per env (the first ``variant.boxes`` boxes of each episode)."""
-        boxes = self.variant.boxes
-        n_events = np.minimum(self.cell.n_events.numpy(), boxes)
-        outcome = self.cell.ev_outcome.numpy()[:, :boxes]
-        counted = np.arange(boxes)[None] < n_events[:, None]
-        count = {o: ((outcome == OUTCOMES.index(o)) & counted).sum(1) for o in Outcome}
-        wrong = count[Outcome.MISPLACED] + count[Outcome.DROPPED]
-        done = n_events >= boxes
-        return {"is_success": done & (wrong == 0), "failed": wrong > 0, "correct": count[Outcome.PLACED],
-                "misplaced": count[Outcome.MISPLACED], "dropped": count[Outcome.DROPPED],
-                "let_through": count[Outcome.REJECTED], "boxes_done": n_events,
+        n_events = self.cell.n_events.numpy()
+        t = tally(n_events, self.cell.ev_outcome.numpy(), self.variant.boxes)
+        return {"is_success": t["success"], "failed": t["failed"], "correct": t[Outcome.PLACED.value],
+                "misplaced": t[Outcome.MISPLACED.value], "dropped": t[Outcome.DROPPED.value],
+                "let_through": t[Outcome.REJECTED.value], "boxes_done": np.minimum(n_events, self.variant.boxes),
                 "sim_time": self.steps / self.cell.spec.control_freq}
