@@ -72,5 +72,6 @@ setup(
         "colorsort-slurm=colorsort.cli.slurm:main",
         "colorsort-baseline=colorsort.cli.baseline:main",
         "colorsort-analyze=colorsort.cli.analyze:main",
+        "colorsort-takeover=colorsort.cli.takeover:main",
     ]},
 )

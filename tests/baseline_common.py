@@ -44,7 +44,8 @@ def scores(rows: list[dict], recipe: dict | None = None) -> dict:
 
 
 # ColorSort's own console scripts, by name: the pipeline's stages that tests run in their own process
-MAINS = {"colorsort-collect": "colorsort.cli.collect", "colorsort-eval": "colorsort.cli.eval"}
+MAINS = {"colorsort-collect": "colorsort.cli.collect", "colorsort-eval": "colorsort.cli.eval",
+         "colorsort-takeover": "colorsort.cli.takeover"}
 
 
 def run_in_process(cmd: list[str], log: Path) -> float:

@@ -174,8 +174,8 @@ def test_warp_backend_evaluation_gives_the_cpu_cells_episode_outcomes(tmp_path):
     (command,) = [line for line in page.splitlines() if line.startswith("colorsort-eval") and "--device cpu" in line]
     argv = shlex.split(command)[1:]
     assert main([*argv, "--json", str(tmp_path / "warp.json")]) == 0
-    backend = argv.index("--backend")
-    cpu = [a for i, a in enumerate(argv) if i not in (backend, backend + 1) and a not in ("--device", "cpu")]
+    drop = {argv.index(flag) + k for flag in ("--backend", "--device", "--envs") for k in (0, 1)}
+    cpu = [a for i, a in enumerate(argv) if i not in drop]  # the CPU cell in this process (seeds alone set episodes)
     assert main([*cpu, "--json", str(tmp_path / "cpu.json")]) == 0
     warp, cpu = (json.loads((tmp_path / f"{b}.json").read_text()) for b in ("warp", "cpu"))
 

@@ -173,6 +173,46 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
     assert f"| default | {get_recipe('camera-diffusion').label} | 1 | 2 steps" in printed
 
 
+@pytest.mark.slow
+def test_a_dagger_round_adds_the_experts_labels_of_the_policys_states_and_trains_again(tmp_path, in_process, capsys):
+    """--dagger.rounds=1, tiny: the first policy plays a `default` episode, the expert takes over after 5 steps and
+    labels the states from there (their own task text), the labels join the demo, a second policy is trained on
+    both from scratch and is the one scored; the same command again reuses every stage."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from colorsort.training.takeover import PROVENANCE, TAKEOVER_SEED, TAKEOVER_TASK
+
+    out = tmp_path / "dagger"
+    argv = ["--recipe", "state", "--demos.counts=1", "--demos.train_mix=default:1", "--demos.boxes_per_episode=1",
+            "--training.steps=2", "--training.seeds=1000", "--training.batch_size=2", "--training.num_workers=0",
+            "--dagger.rounds=1", "--dagger.episodes=1", "--dagger.handover=5:5", "--evaluation.variants=default",
+            "--evaluation.episodes=1", "--evaluation.curve_episodes=1", "--evaluation.episode_length=5",
+            "--workers", "1", "--envs", "1", "--out", str(out)]
+    status, printed = baseline_main(argv, capsys)
+    assert status == 0, printed[-3000:]
+    (demos,) = (out / "data").glob("demos-1-????????")
+    (labels,) = (out / "data").glob("labels-default-r1-*")
+    (merged,) = (out / "data").glob("demos-1-dagger1-*")
+    first, second = (sorted((out / "train").glob(f"{d.name}-2steps-*-seed1000")) for d in (demos, merged))
+    assert len(first) == len(second) == 1
+    provenance = json.loads((labels / "meta" / PROVENANCE).read_text())
+    assert provenance["policy"] == str(first[0] / "checkpoints" / "last" / "pretrained_model")
+    assert provenance["kept"] == [TAKEOVER_SEED] and provenance["handed_over_at"] == {str(TAKEOVER_SEED): 5}
+    root = {d: LeRobotDataset("local/colorsort-baseline", root=d) for d in (demos, labels, merged)}
+    assert root[merged].num_episodes == root[demos].num_episodes + 1
+    assert root[merged].num_frames == root[demos].num_frames + root[labels].num_frames
+    assert TAKEOVER_TASK in set(root[merged].meta.tasks.index) and len(root[merged].meta.tasks) == 2
+    results = json.loads((out / "results.json").read_text())
+    (row,) = results["rows"]
+    assert row["frames"] == root[merged].num_frames and results["recipe"]["dagger"]["rounds"] == 1
+    assert list((out / "eval").glob(f"{second[0].name}-*-default-*.json"))  # the second policy is scored
+    assert "| default | ACT + DAgger (1 round), state | 1 |" in printed
+
+    status, again = baseline_main(argv, capsys)
+    assert status == 0, again[-3000:]
+    assert all(f"reusing {p}" in again for p in (labels, merged, second[0]))
+
+
 def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):
     """Each seed's run has a timing file of its own (a learning curve measures minutes from that run's start)."""
     from colorsort.training import stages

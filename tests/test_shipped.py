@@ -13,16 +13,21 @@ from colorsort.cli.eval import main as eval_main
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(SHIPPED))
 def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
-    """README's command for a shipped policy on its main variant's first seed, 400 steps (20 s) of it: cameras come
-    from the checkpoint, and it places a box."""
+    """README's command for a shipped policy on its main variant's first seed, cut 2 s after the time its scores
+    say it placed its first box there: cameras come from the checkpoint, and it places that box as scored."""
     if not SHIPPED[name].is_dir():
         pytest.skip(f"baselines/{name} is not shipped")
-    scores_path = SHIPPED[name] / "scores.json"
-    scores = json.loads(scores_path.read_text()) if scores_path.is_file() else {}
-    variant = scores.get("recipe", {}).get("main_variant", "default")
+    shipped = json.loads((SHIPPED[name] / "scores.json").read_text())
+    variant = shipped["recipe"]["main_variant"]
+    largest = max(r["demos_tried"] for r in shipped["rows"])
+    seed = shipped["recipe"]["seeds"][0]  # the shipped policy: the largest demo set's first training seed
+    (scored,) = [r for r in shipped["rows"] if (r["variant"], r["demos_tried"], r["seed"]) == (variant, largest, seed)]
+    first = scored["per_episode"][0]
+    placed_at = min(b["time"] for b in first["boxes"] if b["outcome"] == "placed")  # [s]
     report = tmp_path / "eval.json"
-    assert eval_main(["--policy", str(SHIPPED[name]), "--variant", variant, "--episodes", "1",
-                      "--episode-length", "400", "--json", str(report)]) == 0
+    assert eval_main(["--policy", str(SHIPPED[name]), "--variant", variant, "--episodes", "1", "--seed",
+                      str(first["seed"]), "--episode-length", str(round(placed_at * 20) + 40),  # 20 Hz
+                      "--json", str(report)]) == 0
     result = json.loads(report.read_text())
     assert result["correct"] >= 1  # it picks and places: not an untrained policy
 

@@ -5,7 +5,9 @@ The model is the CPU cell's, compiled by robosuite on the host (``spec.CellSpec`
 (``schedule.episode_draws``). A control step is what ``ColorSort.step`` does: for each of its physics
 steps, MuJoCo's first half-step (``step1``), the joint servo at its own rate, the suction valve, the
 belt and the seal, then the second half-step (``step2``); then the referee, the spawner, a forward pass
-and the observations. On a CUDA device the whole control step is one captured CUDA graph.
+and the observations. The whole control step is captured once as a graph (a CUDA graph on a GPU, Warp's CPU
+graph on its CPU device) and launched per step: without it, Python's launch of each of the step's thousands of
+kernels costs more than the kernels (Warp's CPU device: 0.79 s against 0.067 s a control step of 2 worlds).
 
 Each world's scene lights follow its episode's ``Lighting`` (``lighting.LightRig``); the headlight is the
 same in every world (Warp's renderer compiles it in), at the cell's own dim setting.
@@ -72,7 +74,8 @@ class BatchedCell:
         max_boxes: boxes per episode whose draws are prepared and whose events are kept.
         cameras: cameras rendered into every observation (``cameras.BatchedCameras``); none by default.
         image_size: their (height, width) [px].
-        use_graph: on a CUDA device, capture the control step as one CUDA graph (launched per step).
+        use_graph: capture the control step as one graph (CUDA's, or Warp's on its CPU device), launched per
+            step; False launches every kernel from Python each step.
     """
 
     def __init__(self, spec: CellSpec, variant: Variant, worlds: int, device: str = "cpu", max_boxes: int = 64,
@@ -219,7 +222,7 @@ class BatchedCell:
             raise ActionError("actions must be finite")
         wp.to_torch(self.action).copy_(action)
         self._sync()
-        if self.device.is_cuda and self.use_graph:
+        if self.use_graph:
             if self._graph is None:
                 with wp.ScopedDevice(self.device), wp.ScopedCapture() as capture:
                     self._control_step()

@@ -5,7 +5,8 @@ For each demo count of the recipe: collect (``stages.collect``); for each traini
 sets' on the main variant; then the learning curve (each earlier checkpoint of the largest set's
 first seed on the main variant's first ``curve_episodes`` seeds; the scored checkpoint's point is the
 first episodes of its full score). The scored checkpoint is the last, or where the recipe says so
-(``select_episodes``) the one that did best on validation seeds (``selection``).
+(``select_episodes``) the one that did best on validation seeds (``selection``). With DAgger rounds
+(``recipe.dagger``) the largest set's policy of each seed is the last round's (``dagger``).
 Finished stages are reused, so the pipeline can be rebuilt over several sittings.
 """
 
@@ -69,6 +70,9 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
         steps = training.updates(largest, frames)
         for seed in training.seeds:
             run_dir, timing = stages.train(recipe, data, steps, seed, out)
+            if largest and recipe.dagger.rounds:
+                run_dir, timing, trained_on = dagger(recipe, n, data, run_dir, timing, steps, seed, out)
+                frames = stages.size(trained_on)[1]  # the demos' and the expert's labels
             if settings.until == "train":
                 continue
             model, chosen, validation = choose(recipe, settings, run_dir, timing, steps)
@@ -105,6 +109,22 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     if ship_to is not None:
         ship(recipe, shipped, results, plots, ship_to, command)
     return results
+
+
+def dagger(recipe: Recipe, n: int, data: Path, run_dir: Path, timing: dict, steps: int, seed: int,
+           out: Path) -> tuple[Path, dict, Path]:
+    """DAgger's rounds after the first training (``recipe.dagger``): each round's policy plays every training
+    variant, the expert labels the states it reached, the labels join the training set and a new policy is trained
+    on it from scratch. The last round's run, its timing (wall time: every round's training summed) and its
+    training set."""
+    wall_s = timing["wall_s"]
+    for round_ in range(1, recipe.dagger.rounds + 1):
+        labels = [stages.label(recipe, run_dir, variant, k, round_, out)
+                  for k, variant in enumerate(recipe.demos.train_variants)]
+        data = stages.add_labels(recipe, data, labels, f"demos-{n}-dagger{round_}", out)
+        run_dir, timing = stages.train(recipe, data, steps, seed, out)
+        wall_s += timing["wall_s"]
+    return run_dir, {**timing, "wall_s": round(wall_s, 1)}, data
 
 
 def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,

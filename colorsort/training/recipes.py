@@ -1,9 +1,10 @@
 """Named recipes for the learned baselines: the demos, the LeRobot policy, its training and its evaluation.
 
-A recipe is everything ``colorsort-baseline`` needs to rebuild a baseline, in four sections as
+A recipe is everything ``colorsort-baseline`` needs to rebuild a baseline, in sections as
 ``lerobot-train``'s configuration has them: ``demos`` (which variants the expert's demos come from and in
 what proportion, the cameras recorded, the demonstrator's perturbations), ``policy`` (ACT or diffusion,
-``policy_settings``), ``training`` and ``evaluation``. Each section is a frozen dataclass that checks its own
+``policy_settings``), ``training``, ``dagger`` (rounds of expert labels on the policy's own states, none by
+default) and ``evaluation``. Each section is a frozen dataclass that checks its own
 fields; ``Recipe`` checks how they fit together. Every field is a ``colorsort-baseline`` flag,
 ``--<section>.<field>=<value>`` (``flags``). The presets (``RECIPES``):
 
@@ -43,7 +44,7 @@ IRB140_VARIANTS = ("seed", "default", "fast", "jitter", "lighting", "distractors
 TRACKING_VARIANTS = ("tracking", "tracking-jitter", "tracking-fast")
 CAMERA_MIX = (("default", 1.0), ("lighting", 1.0), ("jitter", 1.0), ("fast", 1.0), ("distractors", 2.0))
 DEVICES = ("cpu", "cuda", "mps")
-SECTIONS = ("demos", "policy", "training", "evaluation")
+SECTIONS = ("demos", "policy", "training", "dagger", "evaluation")
 
 
 def _at_least_one(section: object, *names: str) -> None:
@@ -199,6 +200,35 @@ class TrainSettings:
 
 
 @dataclass(frozen=True)
+class DaggerSettings:
+    """DAgger (Ross et al., 2011) after behaviour cloning: rounds of "the policy drives, the expert labels the
+    states it reached, the labels join the training set, the policy is trained again" (``colorsort-takeover``
+    records a round's labels). Each round trains a new policy from scratch on the demos and every round's labels,
+    for the recipe's updates and seeds; the last round's policy is the one scored. Only the largest demo set runs
+    rounds.
+
+    Attributes:
+        rounds: rounds after the first training; 0: behaviour cloning alone.
+        episodes: episodes the policy plays per round on each training variant (the expert finishes each; those
+            it finishes with every box right are kept).
+        handover: [steps] (first, last): the policy acts for a number of steps drawn from this range in each
+            episode before the expert takes over.
+    """
+
+    rounds: int = 0
+    episodes: int = 10
+    handover: tuple[int, int] = (20, 200)
+
+    def __post_init__(self) -> None:
+        if self.rounds < 0:
+            raise ConfigError(f"rounds={self.rounds}: give 0 (behaviour cloning alone) or more")
+        _at_least_one(self, "episodes")
+        lo, hi = self.handover
+        if not 0 <= lo <= hi:
+            raise ConfigError(f"handover={self.handover}: give FIRST:LAST steps with 0 <= FIRST <= LAST")
+
+
+@dataclass(frozen=True)
 class EvalSettings:
     """How the trained policies are scored (``colorsort-eval`` on each variant's fixed evaluation seeds).
 
@@ -240,13 +270,14 @@ class EvalSettings:
 
 @dataclass(frozen=True)
 class Recipe:
-    """One learned baseline, from demos to scores: its preset's ``name`` and four sections."""
+    """One learned baseline, from demos to scores: its preset's ``name`` and five sections."""
 
     name: str
     demos: DemoSettings = field(default_factory=DemoSettings)
     policy: PolicySettings = SMALL_ACT
     training: TrainSettings = field(default_factory=TrainSettings)
     evaluation: EvalSettings = field(default_factory=EvalSettings)
+    dagger: DaggerSettings = field(default_factory=DaggerSettings)
 
     def __post_init__(self) -> None:
         self._check_fit()
@@ -277,7 +308,9 @@ class Recipe:
 
     @property
     def label(self) -> str:
-        return f"{self.policy.name}, {'+'.join(self.demos.cameras) if self.demos.cameras else 'state'}"
+        rounds = self.dagger.rounds
+        method = f"{self.policy.name} + DAgger ({rounds} round{'s' * (rounds > 1)})" if rounds else self.policy.name
+        return f"{method}, {'+'.join(self.demos.cameras) if self.demos.cameras else 'state'}"
 
     def override(self, changes: dict[str, Any]) -> Recipe:
         """This recipe with ``changes`` made, keyed ``section.field`` (``{"demos.counts": (8,)}``); a perturbation
@@ -302,8 +335,11 @@ class Recipe:
         perturbations by name."""
         demos = {f.name: getattr(self.demos, f.name) for f in fields(self.demos) if f.name != "perturbations"}
         demos["perturbations"] = {p.name: p.settings() for p in self.demos.perturbations}
-        return json.loads(json.dumps({"name": self.name, "demos": demos, "policy": asdict(self.policy),
-                                      "training": asdict(self.training), "evaluation": asdict(self.evaluation)}))
+        sections = {"name": self.name, "demos": demos, "policy": asdict(self.policy),
+                    "training": asdict(self.training), "evaluation": asdict(self.evaluation)}
+        if self.dagger.rounds:  # a recipe without rounds reads as before DAgger was a setting
+            sections["dagger"] = asdict(self.dagger)
+        return json.loads(json.dumps(sections))
 
 
 RECIPES: dict[str, Recipe] = {r.name: r for r in (

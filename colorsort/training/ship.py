@@ -54,6 +54,18 @@ def demo_line(recipe: Recipe) -> str:
     return "; ".join([mix, boxes, *(p.describe() for p in everywhere)])
 
 
+def dagger_line(recipe: Recipe, frames: int) -> str:
+    """The README's sentence on DAgger's rounds, or nothing for behaviour cloning alone."""
+    d = recipe.dagger
+    if not d.rounds:
+        return ""
+    return (f" Then {d.rounds} DAgger round{'s' * (d.rounds > 1)}: each time the last policy played {d.episodes} "
+            f"episodes of every training variant, the expert took over after {d.handover[0]}-{d.handover[1]} steps "
+            f"and labelled the states it reached (`colorsort-takeover`), and a new policy was trained from scratch "
+            f"on the demos and every round's labels ({frames} frames in all); the minutes count every round's "
+            f"training.")
+
+
 def ship(recipe: Recipe, model: Path, results: Results, plots: list[Path], dest: Path, command: str) -> None:
     """Copy ``model`` to ``dest`` with ``scores.json`` (``results``), the plots and a README of how it was made."""
     dest.mkdir(parents=True, exist_ok=True)
@@ -93,6 +105,7 @@ def ship(recipe: Recipe, model: Path, results: Results, plots: list[Path], dest:
                   f"{validation_table(every_seed)}\n")
     at = f" (shipped: its checkpoint after {largest[0].checkpoint})" if largest[0].checkpoint is not None else ""
     cameras = ",".join(demos.cameras) or "none"
+    dagger = dagger_line(recipe, largest[0].frames)
     task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
 
@@ -102,7 +115,7 @@ def ship(recipe: Recipe, model: Path, results: Results, plots: list[Path], dest:
 Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results.started}, on
 {machine(training.device)}: {demos.counts[-1]} expert demos tried ({demo_line(recipe)}),
 {largest[0].demos} kept, {largest[0].steps} updates at batch {training.batch_size} in
-{largest[0].train_minutes:.0f} min of `lerobot-train`{at}. Stages reused from earlier runs of the same command
+{largest[0].train_minutes:.0f} min of `lerobot-train`{at}.{dagger} Stages reused from earlier runs of the same command
 count with the time they took then.
 
 Run it:

@@ -5,6 +5,8 @@ Layout of the working folder ``out``::
 
     data/<variant>-<n>-<key>/  colorsort-collect's dataset of n demos on one variant; stage.json its settings
     data/demos-<N>-<key>/     the training set: the parts merged (cameras: box state removed)
+    data/labels-<variant>-r<R>-<key>/  colorsort-takeover's expert labels of DAgger round R on one variant
+    data/demos-<N>-dagger<R>-<key>/  round R's training set: round R-1's and round R's labels merged
     train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its
                               timing and settings; under a constant rate, the first S updates of a longer run
     eval/<run>[-at<U>]-<exec>-<variant>-<key>.json  colorsort-eval's report of the run's last checkpoint (or
@@ -117,6 +119,57 @@ def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
                        repo_id=REPO_ID)
         shutil.rmtree(merged)
     (root / "meta" / "complete").write_text("\n".join(p.name for p in parts) + "\n")  # what it was merged from
+
+
+def label(recipe: Recipe, run_dir: Path, variant: str, k: int, round_: int, out: Path) -> Path:
+    """``colorsort-takeover`` of DAgger round ``round_`` on training variant ``variant`` (the k-th): the last
+    checkpoint of ``run_dir`` drives, the expert labels (reused if there). Round r's episodes of variant k have
+    seeds from ``TAKEOVER_SEED + k * SEED_STRIDE + (r - 1) * episodes``: no round or variant repeats one."""
+    from colorsort.training.takeover import TAKEOVER_SEED
+
+    dagger = recipe.dagger
+    seed = TAKEOVER_SEED + k * SEED_STRIDE + (round_ - 1) * dagger.episodes
+    args = ["--variant", variant, "--episodes", str(dagger.episodes), "--handover", "{},{}".format(*dagger.handover),
+            "--seed", str(seed), "--repo-id", REPO_ID]
+    settings = {"colorsort-takeover": ["--policy", run_dir.name, *args]}  # the policy by its run's cache name
+    root = out / "data" / cache.name(f"labels-{variant}-r{round_}", settings)
+    if (root / cache.SETTINGS_FILE).is_file():
+        print(f"reusing {root}")
+        return root
+    shutil.rmtree(root, ignore_errors=True)
+    model = run_dir / "checkpoints" / "last" / "pretrained_model"
+    run([str(BIN / "colorsort-takeover"), "--policy", str(model), *args, "--out", str(root)],
+        out / "logs" / f"takeover-{root.name}.log")
+    cache.remember(root, settings)
+    return root
+
+
+def add_labels(recipe: Recipe, data: Path, labels: list[Path], stem: str, out: Path) -> Path:
+    """The training set ``data`` with the expert's ``labels`` added (``aggregate_datasets``; reused if there). With
+    cameras the labels lose ``observation.environment_state`` first, as the demos did."""
+    from lerobot.datasets.dataset_tools import remove_feature
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    merged = {"data": data.name, "labels": [p.name for p in labels]}
+    root = out / "data" / cache.name(stem, merged)
+    if (root / "meta" / "complete").is_file():
+        print(f"reusing {root}")
+        return root
+    parts = [data]
+    for part in labels:
+        if recipe.demos.cameras:
+            stripped = out / "data" / f".{part.name}.stripped"
+            shutil.rmtree(stripped, ignore_errors=True)
+            remove_feature(LeRobotDataset(REPO_ID, root=part), "observation.environment_state", output_dir=stripped,
+                           repo_id=REPO_ID)
+            part = stripped
+        parts.append(part)
+    merge(parts, root, drop_box_state=False)
+    for part in parts[1:]:
+        if part.name.endswith(".stripped"):
+            shutil.rmtree(part)
+    cache.remember(root, merged)
+    return root
 
 
 def size(data: Path) -> tuple[int, int]:
