@@ -157,39 +157,40 @@ def test_it_takes_over_from_a_shipped_policy_in_the_middle_of_an_episode(policy_
 
 
 @pytest.mark.slow
-def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_path):
-    """The shipped state policy drives each episode for 30-60 steps (drawn from the episode's seed), the expert takes
-    over and finishes it: its frames from the policy's state on are a LeRobot dataset with the demos' features,
-    their own task text and a record of where they came from; an existing folder is refused."""
+def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_path, monkeypatch, capsys):
+    """docs/expert.md's colorsort-takeover command, as written (from a folder holding the shipped baselines): the
+    shipped state policy drives each episode for 30-60 steps (drawn from the episode's seed), the expert takes over
+    and finishes it: its frames from the policy's state on are a LeRobot dataset with the demos' features, their
+    own task text and a record of where they came from; an existing folder is refused."""
     import json
+    import shlex
+    from pathlib import Path
 
-    from baseline_common import SHIPPED
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     from colorsort.benchmark.gym_env import ColorSortGymEnv
+    from colorsort.cli.takeover import main
     from colorsort.data.schema import STATE
-    from colorsort.training.takeover import (
-        PROVENANCE,
-        TAKEOVER_SEED,
-        TAKEOVER_TASK,
-        TakeoverConfig,
-        handover_step,
-        record_takeovers,
-    )
+    from colorsort.training.takeover import PROVENANCE, TAKEOVER_SEED, TAKEOVER_TASK, TakeoverConfig, handover_step
 
-    out = tmp_path / "takeover"
-    config = TakeoverConfig(policy=str(SHIPPED["act-state"]), out=str(out), episodes=2, handover=(30, 60))
-    summary = record_takeovers(config)
+    repo = Path(__file__).resolve().parents[1]
+    (line,) = [ln for ln in (repo / "docs" / "expert.md").read_text().splitlines()
+               if ln.startswith("colorsort-takeover ")]
+    argv = shlex.split(line)[1:]
+    (tmp_path / "baselines").symlink_to(repo / "baselines")
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 0
+    out = tmp_path / "datasets" / "labels"
+    assert "kept 2 of 2 episodes" in capsys.readouterr().out
+    provenance = json.loads((out / "meta" / PROVENANCE).read_text())
     seeds = [TAKEOVER_SEED, TAKEOVER_SEED + 1]
-    assert summary.kept == seeds and not summary.failed
-    assert summary.handed_over_at == {s: handover_step(s, (30, 60)) for s in seeds}
-    assert all(30 <= n <= 60 for n in summary.handed_over_at.values())
-    dataset = LeRobotDataset(config.repo_id, root=out)
-    assert dataset.num_episodes == 2 and dataset.num_frames == summary.frames
+    assert provenance["policy"] == "baselines/act-state" and provenance["kept"] == seeds
+    assert provenance["handed_over_at"] == {str(s): handover_step(s, (30, 60)) for s in seeds}
+    assert all(30 <= n <= 60 for n in provenance["handed_over_at"].values())
+    dataset = LeRobotDataset("local/colorsort-takeover", root=out)
+    assert dataset.num_episodes == 2
     assert list(dataset.meta.tasks.index) == [TAKEOVER_TASK]
     assert "observation.environment_state" in dataset.meta.features and not dataset.meta.video_keys
-    provenance = json.loads((out / "meta" / PROVENANCE).read_text())
-    assert provenance["policy"] == str(SHIPPED["act-state"]) and provenance["kept"] == seeds
 
     # the first labelled frame is the state the policy left, not the reset's: the arm has moved
     reset = ColorSortGymEnv("default", cameras=(), render_mode=None)
@@ -199,7 +200,6 @@ def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_
         reset.close()
     first = dataset[0][STATE].numpy()
     assert np.abs(first[:6] - start[:6]).max() > 0.05  # [rad]
-    with pytest.raises(ValueError, match="never overwritten"):
-        record_takeovers(config)
+    assert main(argv) == 2 and "never overwritten" in capsys.readouterr().err
     with pytest.raises(ValueError, match="handover"):
         TakeoverConfig(policy="p", out="o", handover=(60, 30))

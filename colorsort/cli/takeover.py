@@ -2,8 +2,8 @@
 
 Example::
 
-    colorsort-takeover --policy baselines/act-state --variant jitter --episodes 20 --handover 20,200 \\
-        --out datasets/labels-jitter
+    colorsort-takeover --policy baselines/act-state --variant default --episodes 2 --handover 30,60 \\
+        --out datasets/labels
 
 Episode ``i`` runs with env seed ``seed + i`` (from 40,000 by default, apart from the demos', evaluation's and
 validation's seeds). The policy acts for a number of steps drawn from ``--handover`` (from the episode's seed),
