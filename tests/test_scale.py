@@ -36,6 +36,36 @@ def cluster() -> str:
     ray.shutdown()
 
 
+def documented_ray_command(program: str) -> list[str]:
+    """docs/scaling.md's command that runs ``program`` on Ray, verbatim."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "scaling.md").read_text()
+    (line,) = [line for line in page.splitlines() if line.startswith(f"{program} ") and "--executor ray" in line]
+    return shlex.split(line)
+
+
+def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_docs_collect_command(tmp_path):
+    """The batch script on a one-node stand-in for SLURM (srun runs its command here, scontrol names this host),
+    its command the docs' colorsort-collect on Ray, verbatim: a Ray head starts and the command records there.
+    First in the module: its head is the only Ray cluster on the machine (the module's starts after it)."""
+    shims = tmp_path / "bin"
+    shims.mkdir()
+    (shims / "srun").write_text('#!/bin/bash\n'
+                                'while [[ $# -gt 0 && $1 == -* ]]; do [[ $1 == -w ]] && shift; shift; done\n'
+                                'exec "$@"\n')
+    (shims / "scontrol").write_text("#!/bin/bash\nhostname\n")
+    for shim in shims.iterdir():
+        shim.chmod(0o755)
+    script = tmp_path / "job.sbatch"
+    subprocess.run([str(Path(sys.executable).parent / "colorsort-slurm"), "--nodes", "1", "--cpus-per-node", "2",
+                    "--port", "6391", "--out", str(script), "--", *documented_ray_command("colorsort-collect")],
+                   check=True, capture_output=True)
+    env = {**os.environ, "PATH": f"{shims}:{os.environ['PATH']}", "SLURM_JOB_NODELIST": "node1"}
+    job = subprocess.run(["bash", str(script)], env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert job.returncode == 0, job.stdout[-3000:] + job.stderr[-3000:]
+    assert "on 2 ray workers; retried 0" in job.stdout
+    assert json.loads((tmp_path / "datasets/colorsort-ray" / MARKER).read_text())["episodes"] == [0, 1]
+
+
 def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(reference, cluster, tmp_path):
     """The same episodes as local processes (an episode's data depends on its seed alone), every one once, though a
     worker was killed outright mid-shard and its shard run again."""
@@ -94,35 +124,6 @@ def test_a_filmed_evaluation_on_ray_films_each_episode_where_it_runs(cluster, tm
     for (_, seed), video in spread.films.items():  # mp4 files of the reset and every step, made in the Ray workers
         (tmp_path / f"{seed}.mp4").write_bytes(video)
         assert video[4:8] == b"ftyp" and len(read_video(tmp_path / f"{seed}.mp4")) == 31
-
-
-def documented_ray_command(program: str) -> list[str]:
-    """docs/scaling.md's command that runs ``program`` on Ray, verbatim."""
-    page = (Path(__file__).resolve().parents[1] / "docs" / "scaling.md").read_text()
-    (line,) = [line for line in page.splitlines() if line.startswith(f"{program} ") and "--executor ray" in line]
-    return shlex.split(line)
-
-
-def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_docs_collect_command(tmp_path):
-    """The batch script on a one-node stand-in for SLURM (srun runs its command here, scontrol names this host),
-    its command the docs' colorsort-collect on Ray, verbatim: a Ray head starts and the command records there."""
-    shims = tmp_path / "bin"
-    shims.mkdir()
-    (shims / "srun").write_text('#!/bin/bash\n'
-                                'while [[ $# -gt 0 && $1 == -* ]]; do [[ $1 == -w ]] && shift; shift; done\n'
-                                'exec "$@"\n')
-    (shims / "scontrol").write_text("#!/bin/bash\nhostname\n")
-    for shim in shims.iterdir():
-        shim.chmod(0o755)
-    script = tmp_path / "job.sbatch"
-    subprocess.run([str(Path(sys.executable).parent / "colorsort-slurm"), "--nodes", "1", "--cpus-per-node", "2",
-                    "--port", "6391", "--out", str(script), "--", *documented_ray_command("colorsort-collect")],
-                   check=True, capture_output=True)
-    env = {**os.environ, "PATH": f"{shims}:{os.environ['PATH']}", "SLURM_JOB_NODELIST": "node1"}
-    job = subprocess.run(["bash", str(script)], env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path)
-    assert job.returncode == 0, job.stdout[-3000:] + job.stderr[-3000:]
-    assert "on 2 ray workers; retried 0" in job.stdout
-    assert json.loads((tmp_path / "datasets/colorsort-ray" / MARKER).read_text())["episodes"] == [0, 1]
 
 
 def test_the_docs_evaluation_on_ray_works_as_written(cluster, tmp_path, monkeypatch, capsys):
