@@ -229,6 +229,7 @@ def test_a_state_only_dataset_loads_in_lerobot_with_no_video_features(tmp_path):
     assert not any(k.startswith("observation.images") for k in item)
 
 
+@pytest.mark.slow
 def test_a_variant_records_the_benchmarks_own_episode_for_each_seed(tmp_path):
     """--variant jitter: the recorded episode is the one the benchmark's env gives for that seed (box off the
     centre line and turned), replay rebuilds the variant's task, and the marker says which variant."""
@@ -263,6 +264,7 @@ def test_a_variant_and_a_preset_or_robot_are_not_given_together(capsys):
         CollectConfig(variant="nope")
 
 
+@pytest.mark.slow
 def test_late_pass_holds_the_belt_back_and_stores_the_experts_action(tmp_path):
     """Seed 2 of distractors starts with a purple box: the expert lets it through at once; with
     --late-pass the belt stays stopped for the drawn steps while the stored action says belt-pass."""
@@ -287,6 +289,7 @@ def test_late_pass_holds_the_belt_back_and_stores_the_experts_action(tmp_path):
     assert plain_on + delay <= on <= plain_on + delay + 1  # the box clears the ray a step later at most
 
 
+@pytest.mark.slow
 def test_late_pick_holds_the_arm_at_a_picks_start_and_stores_the_experts_approach(tmp_path):
     """Seed 0 of default starts with a box of a bin colour: with --late-pick the arm stays where it waited for the
     drawn steps while every stored action is the expert's first approach action, then the expert goes on with
