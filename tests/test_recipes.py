@@ -174,6 +174,22 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
 
     assert label(Results.from_json(scores([], stored))) == "ACT, snapshot"
     assert label(Results.from_json(scores([], {"cameras": ["sensor", "wrist"]}))) == "ACT, sensor+wrist"  # flat
+    assert "dagger" not in stored  # a recipe without DAgger's rounds is stored as before they were a setting
+
+
+def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themselves():
+    from colorsort.training.records import Results
+    from colorsort.training.tables import label
+
+    recipe = get_recipe("state", {"dagger.rounds": 2, "dagger.episodes": 4, "dagger.handover": (10, 50)})
+    assert recipe.label == "ACT + DAgger (2 rounds), state"
+    stored = recipe.to_json()
+    assert stored["dagger"] == {"rounds": 2, "episodes": 4, "handover": [10, 50]}
+    assert label(Results.from_json(scores([], stored))) == "ACT + DAgger (2 rounds), state"
+    for change, named in (({"dagger.rounds": -1}, "rounds=-1"), ({"dagger.episodes": 0}, "episodes=0"),
+                          ({"dagger.handover": (50, 10)}, "FIRST:LAST")):
+        with pytest.raises(ValueError, match=named):
+            get_recipe("state", change)
 
 
 def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_state():

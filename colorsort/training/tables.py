@@ -47,6 +47,9 @@ def label(scores: Results) -> str:
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
     recipe = scores.recipe
     name = METHODS[recipe.get("policy", {"type": "act"})["type"]]
+    rounds = recipe.get("dagger", {}).get("rounds", 0)  # stored only where a recipe ran DAgger's rounds
+    if rounds:
+        name += f" + DAgger ({rounds} round{'s' * (rounds > 1)})"
     cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
