@@ -178,6 +178,9 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
 
 
 def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themselves():
+    import argparse
+
+    from colorsort.training.flags import add_recipe_flags, recipe_changes
     from colorsort.training.records import Results
     from colorsort.training.tables import label
 
@@ -186,6 +189,11 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     stored = recipe.to_json()
     assert stored["dagger"] == {"rounds": 2, "episodes": 4, "handover": [10, 50]}
     assert label(Results.from_json(scores([], stored))) == "ACT + DAgger (2 rounds), state"
+    parser = argparse.ArgumentParser()
+    add_recipe_flags(parser, recipe)
+    for text in ("10:50", "10,50"):  # a pair as a list of pairs spells it, and as --help shows it
+        args = parser.parse_args([f"--dagger.handover={text}"])
+        assert recipe_changes(args, recipe) == {"dagger.handover": (10, 50)}
     for change, named in (({"dagger.rounds": -1}, "rounds=-1"), ({"dagger.episodes": 0}, "episodes=0"),
                           ({"dagger.handover": (50, 10)}, "FIRST:LAST")):
         with pytest.raises(ValueError, match=named):

@@ -54,8 +54,8 @@ def parse(text: str, hint: Any, flag: str) -> Any:
         origin, args = typing.get_origin(hint), typing.get_args(hint)
     if origin is tuple and len(args) == 2 and args[1] is Ellipsis:
         return () if text.lower() in ("", "none") else tuple(parse(t, args[0], flag) for t in text.split(","))
-    if origin is tuple:
-        parts = text.split(":")
+    if origin is tuple:  # a pair: "A:B" (as in a list of pairs) or "A,B" (as shown alone)
+        parts = text.split(":") if ":" in text else text.split(",")
         if len(parts) != len(args):
             raise ConfigError(f"{flag}: {text!r} is not {':'.join(a.__name__.upper() for a in args)}")
         return tuple(parse(p, a, flag) for p, a in zip(parts, args, strict=True))
