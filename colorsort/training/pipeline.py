@@ -70,9 +70,10 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
         steps = training.updates(largest, frames)
         for seed in training.seeds:
             run_dir, timing = stages.train(recipe, data, steps, seed, out)
+            trained_frames = frames
             if largest and recipe.dagger.rounds:
                 run_dir, timing, trained_on = dagger(recipe, n, data, run_dir, timing, steps, seed, out)
-                frames = stages.size(trained_on)[1]  # the demos' and the expert's labels
+                trained_frames = stages.size(trained_on)[1]  # the demos' and the expert's labels
             if settings.until == "train":
                 continue
             model, chosen, validation = choose(recipe, settings, run_dir, timing, steps)
@@ -82,7 +83,8 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
                 stem = out / "eval" / f"{run_dir.name}{at}-{recipe.policy.execution}-{variant}"
                 report = stages.evaluate(recipe, model, variant, evaluation.episodes_on(variant), stem, settings.envs,
                                          out / "logs")
-                scored.append(ScoreRow(n, kept, frames, seed, steps, round(steps * training.batch_size / frames, 1),
+                scored.append(ScoreRow(n, kept, trained_frames, seed, steps,
+                                       round(steps * training.batch_size / trained_frames, 1),
                                        timing["wall_s"] / 60, report_from_json(report),
                                        chosen if validation else None, tuple(validation)))
                 print(table(scored[-1:], recipe.label).splitlines()[-1], flush=True)

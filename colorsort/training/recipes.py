@@ -47,6 +47,11 @@ DEVICES = ("cpu", "cuda", "mps")
 SECTIONS = ("demos", "policy", "training", "dagger", "evaluation")
 
 
+def with_dagger(method: str, rounds: int) -> str:
+    """A method's name in tables, with DAgger's rounds where it ran them: "ACT + DAgger (2 rounds)"."""
+    return f"{method} + DAgger ({rounds} round{'s' * (rounds > 1)})" if rounds else method
+
+
 def _at_least_one(section: object, *names: str) -> None:
     for name in names:
         if getattr(section, name) < 1:
@@ -308,8 +313,7 @@ class Recipe:
 
     @property
     def label(self) -> str:
-        rounds = self.dagger.rounds
-        method = f"{self.policy.name} + DAgger ({rounds} round{'s' * (rounds > 1)})" if rounds else self.policy.name
+        method = with_dagger(self.policy.name, self.dagger.rounds)
         return f"{method}, {'+'.join(self.demos.cameras) if self.demos.cameras else 'state'}"
 
     def override(self, changes: dict[str, Any]) -> Recipe:

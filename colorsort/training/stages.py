@@ -6,7 +6,7 @@ Layout of the working folder ``out``::
     data/<variant>-<n>-<key>/  colorsort-collect's dataset of n demos on one variant; stage.json its settings
     data/demos-<N>-<key>/     the training set: the parts merged (cameras: box state removed)
     data/labels-<variant>-r<R>-<key>/  colorsort-takeover's expert labels of DAgger round R on one variant
-    data/demos-<N>-dagger<R>-<key>/  round R's training set: round R-1's and round R's labels merged
+    data/demos-<N>-dagger<R>-<key>/  round R's training set: round R-1's with round R's labels merged
     train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its
                               timing and settings; under a constant rate, the first S updates of a longer run
     eval/<run>[-at<U>]-<exec>-<variant>-<key>.json  colorsort-eval's report of the run's last checkpoint (or
@@ -155,19 +155,14 @@ def add_labels(recipe: Recipe, data: Path, labels: list[Path], stem: str, out: P
     if (root / "meta" / "complete").is_file():
         print(f"reusing {root}")
         return root
-    parts = [data]
-    for part in labels:
-        if recipe.demos.cameras:
-            stripped = out / "data" / f".{part.name}.stripped"
-            shutil.rmtree(stripped, ignore_errors=True)
-            remove_feature(LeRobotDataset(REPO_ID, root=part), "observation.environment_state", output_dir=stripped,
-                           repo_id=REPO_ID)
-            part = stripped
-        parts.append(part)
-    merge(parts, root, drop_box_state=False)
-    for part in parts[1:]:
-        if part.name.endswith(".stripped"):
-            shutil.rmtree(part)
+    stripped = [out / "data" / f".{part.name}.stripped" for part in labels] if recipe.demos.cameras else []
+    for part, copy in zip(labels, stripped, strict=False):
+        shutil.rmtree(copy, ignore_errors=True)
+        remove_feature(LeRobotDataset(REPO_ID, root=part), "observation.environment_state", output_dir=copy,
+                       repo_id=REPO_ID)
+    merge([data, *(stripped or labels)], root, drop_box_state=False)
+    for copy in stripped:
+        shutil.rmtree(copy)
     cache.remember(root, merged)
     return root
 

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from colorsort.errors import ConfigError
+from colorsort.training.recipes import with_dagger
 from colorsort.training.records import Results, ScoreRow
 from colorsort.training.report import curve_table, scored_checkpoints, span, summary_table
 
@@ -46,10 +47,8 @@ def label(scores: Results) -> str:
 
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
     recipe = scores.recipe
-    name = METHODS[recipe.get("policy", {"type": "act"})["type"]]
     rounds = recipe.get("dagger", {}).get("rounds", 0)  # stored only where a recipe ran DAgger's rounds
-    if rounds:
-        name += f" + DAgger ({rounds} round{'s' * (rounds > 1)})"
+    name = with_dagger(METHODS[recipe.get("policy", {"type": "act"})["type"]], rounds)
     cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
