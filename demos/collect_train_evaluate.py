@@ -6,22 +6,26 @@ the policy scored on the benchmark's fixed evaluation seeds.
 That is a smoke run of a minute or two. A policy that sorts takes about 40 demos and 3,000 or more updates
 (``--episodes 40 --steps 3000``: about 40 minutes on 2 CPU cores; docs/baselines.md gives the recipes).
 Each stage is the library call a script of your own would make: ``colorsort.data.collect.collect``,
-LeRobot's ``lerobot-train`` (its documented command line, run as a subprocess: LeRobot trains that way), and
-``colorsort.benchmark.evaluate.evaluate``. Nothing is downloaded (``HF_HUB_OFFLINE=1``). The demos are state only,
-so lerobot-train loads them in its own process (``--num_workers=0``): LeRobot spawns each loader process, which
-imports torch and LeRobot again before the first batch.
+LeRobot's ``lerobot.scripts.lerobot_train.train`` (what ``lerobot-train`` runs, given its config as a
+``TrainPipelineConfig`` instead of flags: the same as ``lerobot-train --dataset.repo_id=local/example
+--dataset.root=... --policy.type=act ...``), and ``colorsort.benchmark.evaluate.evaluate``. Nothing is downloaded
+(``HF_HUB_OFFLINE=1``). The demos are state only, so training loads them in this process (``num_workers=0``): LeRobot
+spawns each loader process, which imports torch and LeRobot again before the first batch.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 os.environ.setdefault("MUJOCO_GL", "egl")
+
+from lerobot.configs.default import DatasetConfig  # noqa: E402
+from lerobot.configs.train import TrainPipelineConfig  # noqa: E402
+from lerobot.policies.act.configuration_act import ACTConfig  # noqa: E402
+from lerobot.scripts.lerobot_train import train  # noqa: E402
 
 from colorsort.benchmark.evaluate import evaluate  # noqa: E402
 from colorsort.benchmark.metrics import format_report  # noqa: E402
@@ -44,12 +48,10 @@ def main() -> None:
                                     repo_id="local/example"), progress=False)
     print(f"collected {summary.dataset_episodes} episodes, {summary.dataset_frames} frames: {data}")
 
-    subprocess.run([str(Path(sys.executable).parent / "lerobot-train"), "--dataset.repo_id=local/example",
-                    f"--dataset.root={data}", "--policy.type=act", "--policy.device=cpu", "--policy.push_to_hub=false",
-                    "--policy.dim_model=128", "--policy.dim_feedforward=512", "--policy.n_encoder_layers=2",
-                    "--policy.n_decoder_layers=1", "--policy.use_vae=false", "--policy.optimizer_lr=1e-4",
-                    f"--steps={args.steps}", f"--save_freq={args.steps}", "--batch_size=16", "--num_workers=0",
-                    "--wandb.enable=false", f"--output_dir={run}"], check=True)
+    act = ACTConfig(device="cpu", push_to_hub=False, dim_model=128, dim_feedforward=512, n_encoder_layers=2,
+                    n_decoder_layers=1, use_vae=False, optimizer_lr=1e-4)
+    train(TrainPipelineConfig(dataset=DatasetConfig(repo_id="local/example", root=str(data)), policy=act,
+                              steps=args.steps, save_freq=args.steps, batch_size=16, num_workers=0, output_dir=run))
     policy = run / "checkpoints" / "last" / "pretrained_model"
     print(f"trained {args.steps} updates: {policy}")
 

@@ -66,14 +66,22 @@ def tiny_dataset(tmp_path_factory):
     return root
 
 
-# the scale and crash tests' reference datasets (one per module that asks: module scope)
-@pytest.fixture(scope="module")
+# the scale and crash tests' reference dataset: recorded once per run, by whichever worker asks first
+@pytest.fixture(scope="session")
 def reference(tmp_path_factory):
-    """``scale_common.SCALE``'s collection recorded in this process, one shard, no engine."""
+    """``scale_common.SCALE``'s collection recorded in this process, one shard, no engine. Shared by pytest-xdist's
+    workers through their common temporary folder (a lock file: the first to ask records it, the others wait)."""
+    from filelock import FileLock
+
     from colorsort.data.collect import collect
     from colorsort.data.config import CollectConfig
 
-    root = tmp_path_factory.mktemp("scale") / "reference"
-    summary = collect(CollectConfig(out=str(root), **{**SCALE, "shard_size": 32}), **QUIET)
-    assert summary.kept == 4 and summary.shards == 1
+    shared = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = shared.parent  # pytest-of-<user>/pytest-<n>/, the workers' folders inside
+    root = shared / "scale-reference"
+    with FileLock(str(root) + ".lock"):
+        if not (root / "meta" / "info.json").is_file():
+            summary = collect(CollectConfig(out=str(root), **{**SCALE, "shard_size": 32}), **QUIET)
+            assert summary.kept == 4 and summary.shards == 1
     return root

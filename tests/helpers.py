@@ -7,6 +7,14 @@ a physics test needs it, with as little machinery as possible. In a test, take e
 
 from __future__ import annotations
 
+import io
+import logging
+import os
+import sys
+from contextlib import redirect_stderr, redirect_stdout
+from importlib.metadata import entry_points
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import robosuite as suite
@@ -101,3 +109,29 @@ def exit_status(main, argv: list[str]) -> int:
         return main(argv)
     except SystemExit as stop:
         return stop.code
+
+
+def lerobot_cli(program: str, argv: list[str], cwd: Path) -> tuple[int, str]:
+    """LeRobot's console script ``program`` (``lerobot-train``, ``lerobot-eval``, ...) with ``argv``, in ``cwd``:
+    (exit status, what it printed). Run by the entry point the script calls, in this process: the same code path
+    without a new interpreter (LeRobot's imports alone take 10 to 15 s here). Its logging set-up (which replaces
+    the root logger's handlers), ``sys.argv`` and the working directory are put back afterwards. README's own
+    commands run as real processes (test_lerobot_cli)."""
+    (entry,) = entry_points(group="console_scripts", name=program)
+    root = logging.getLogger()
+    handlers, level, argv0, here = root.handlers[:], root.level, sys.argv, os.getcwd()
+    output = io.StringIO()
+    sys.argv = [program, *argv]
+    try:
+        os.chdir(cwd)
+        with redirect_stdout(output), redirect_stderr(output):
+            try:
+                status = entry.load()() or 0
+            except SystemExit as stop:
+                status = stop.code if isinstance(stop.code, int) else 1
+    finally:
+        os.chdir(here)
+        sys.argv = argv0
+        root.handlers[:] = handlers
+        root.setLevel(level)
+    return status, output.getvalue()

@@ -8,7 +8,6 @@ The rule kernels are held to their Python twins on their own inputs, where physi
 from __future__ import annotations
 
 import json
-import os
 import shlex
 import subprocess
 import sys
@@ -16,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import lerobot_cli
 
 from colorsort.batched.schedule import COLOR_NAMES, episode_draws
 from colorsort.benchmark.gym_env import ColorSortGymEnv
@@ -243,17 +243,16 @@ def test_gymnasium_make_vec_steps_the_batched_cell_and_resets_finished_envs_in_t
 
 @pytest.mark.slow
 def test_lerobot_eval_runs_on_the_batched_cell_as_documented(tmp_path):
-    """docs/gpu.md's lerobot-eval command, as written (from a folder holding the shipped baselines): LeRobot's
-    evaluator steps its envs as one batched cell, scores the episodes and films them."""
+    """docs/gpu.md's lerobot-eval command, as written (from a folder holding the shipped baselines; by its entry
+    point in this process): LeRobot's evaluator steps its envs as one batched cell, scores the episodes and films
+    them."""
     page = (Path(__file__).resolve().parents[1] / "docs" / "gpu.md").read_text().replace("\\\n", " ")
     (line,) = [line for line in page.splitlines() if "lerobot-eval" in line and "--env.backend=warp" in line]
     argv = shlex.split(line)
     assert argv[0] == "HF_HUB_OFFLINE=1"
     (tmp_path / "baselines").symlink_to(Path(__file__).resolve().parents[1] / "baselines")
-    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
-    done = subprocess.run([str(Path(sys.executable).parent / argv[1]), *argv[2:]], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
+    status, printed = lerobot_cli(argv[1], argv[2:], tmp_path)
+    assert status == 0, printed[-3000:]
     (info,) = (tmp_path / "outputs" / "eval").rglob("eval_info.json")
     overall = json.loads(info.read_text())["overall"]
     assert overall["n_episodes"] == 2

@@ -1,7 +1,11 @@
 """LeRobot as its users run it: the docs' lerobot-train and lerobot-eval commands, verbatim, on ColorSort.
 
 The commands are read from docs/benchmark.md and docs/data.md, the pages that show them, so a test
-that passes means the documented command works. Only what the docs say may change is changed: the
+that passes means the documented command works. README's lerobot-train and lerobot-eval and lerobot-dataset-viz
+run as processes of their own, as a user runs them; the docs' other LeRobot commands by their console script's entry
+point in the test's process (``helpers.lerobot_cli``: the same code without 10 to 15 s of LeRobot's imports each).
+
+Only what the docs say may change is changed: the
 training length, batch and data-loading processes (``--steps``, ``--batch_size``, ``--num_workers=0``: each
 spawned loader imports torch and LeRobot again), the evaluation's episode count and batch size (and
 ``use_async_envs`` for the synchronous runs). Everything else is LeRobot's defaults.
@@ -17,11 +21,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import lerobot_cli
 
 from colorsort.benchmark.evaluate import evaluate
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
 
-pytestmark = pytest.mark.slow  # LeRobot's CLIs in fresh processes
+pytestmark = pytest.mark.slow  # LeRobot's CLIs
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 PAGES = (DOCS / "benchmark.md", DOCS / "data.md", DOCS / "baselines.md")  # the pages that show LeRobot's commands
@@ -201,8 +206,9 @@ def test_documented_command_makes_a_state_only_copy_of_a_dataset_with_cameras(ti
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     shutil.copytree(tiny_dataset, tmp_path / "datasets" / "colorsort")
-    result = run(documented_command("lerobot-edit-dataset"), tmp_path, timeout=300)
-    assert result.returncode == 0, result.stderr[-3000:]
+    argv = documented_command("lerobot-edit-dataset")
+    status, printed = lerobot_cli(argv[0], argv[1:], tmp_path)
+    assert status == 0, printed[-3000:]
     original = LeRobotDataset("local/colorsort", root=tmp_path / "datasets" / "colorsort", video_backend="pyav")
     state_only = LeRobotDataset("local/colorsort-state", root=tmp_path / "datasets" / "colorsort-state")
     assert original.meta.video_keys and state_only.meta.video_keys == []
@@ -219,8 +225,9 @@ def test_lerobot_eval_records_rollouts_as_datasets_that_colorsort_replay_explain
 
     argv = replace_flag(documented_command("lerobot-eval", "--eval.recording=true"), "--eval.n_episodes", "2")
     argv.insert(1, "--env.discover_packages_path=colorsort")  # the pre-0.6 way keeps working
-    done = run(argv + ["--env.episode_length=30", "--eval.use_async_envs=false"], readme_checkpoint, timeout=600)
-    assert done.returncode == 0, done.stderr[-3000:]
+    status, printed = lerobot_cli(argv[0], argv[1:] + ["--env.episode_length=30", "--eval.use_async_envs=false"],
+                                  readme_checkpoint)
+    assert status == 0, printed[-3000:]
     root = readme_checkpoint / "outputs/eval/recorded/recordings/colorsort_0"
     for i in range(2):
         ds = LeRobotDataset(f"eval_recording_env_{i}", root=root / f"env_{i}", video_backend="pyav")
@@ -240,7 +247,7 @@ def test_lerobot_dataset_viz_saves_an_rrd_of_a_colorsort_dataset(tiny_dataset, t
 
     argv = replace_flag(documented_command("lerobot-dataset-viz"), "--root", str(tiny_dataset))
     argv = replace_flag(argv, "--repo-id", "local/colorsort")
-    done = run(argv, tmp_path, timeout=300)
+    done = run(argv, tmp_path, timeout=300)  # its own process: Rerun writes the file's footer as the process ends
     assert done.returncode == 0, done.stderr[-3000:]
     rrd = tmp_path / "outputs" / "viz" / "local_colorsort_episode_0.rrd"
     assert rrd.stat().st_size > 10_000
@@ -258,8 +265,9 @@ def test_lerobot_trains_a_diffusion_policy_on_colorsort_that_colorsort_eval_runs
     collect = replace_flag(documented_command("colorsort-collect", "--cameras none"), "--episodes", "2")
     assert collect_main(replace_flag(collect, "--boxes-per-episode", "1")[1:]) == 0
     train = replace_flag(documented_command("lerobot-train", "--policy.type=diffusion"), "--steps", "2")
-    done = run(replace_flag(train, "--batch_size", "2") + ["--num_workers=0"], tmp_path, timeout=600)
-    assert done.returncode == 0, done.stderr[-3000:]
+    status, printed = lerobot_cli(train[0], replace_flag(train, "--batch_size", "2")[1:] + ["--num_workers=0"],
+                                  tmp_path)
+    assert status == 0, printed[-3000:]
     config = json.loads((tmp_path / "outputs/train/diffusion-state/checkpoints/last/pretrained_model/config.json")
                         .read_text())
     assert config["type"] == "diffusion" and config["down_dims"] == [128, 256]

@@ -23,7 +23,8 @@ from colorsort.training.recipes import get_recipe
 
 @pytest.fixture
 def in_process(monkeypatch):
-    """colorsort-collect and colorsort-eval stages in this process (lerobot-train stays LeRobot's own process)."""
+    """Every stage's command (colorsort-collect, colorsort-eval, colorsort-takeover, lerobot-train) run by its own
+    entry point in this process, not a new interpreter each."""
     monkeypatch.setattr(stages, "run", run_in_process)
 
 
