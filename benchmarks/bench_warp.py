@@ -143,8 +143,9 @@ def run() -> int:
 
         figures["policy"] = {}
         for n in [int(w) for w in args.policy_worlds.split(",")]:
-            report, timing = evaluate_batched(args.policy, variant.name, n, seed=10_000, envs=n, device=args.device,
-                                              episode_length=args.episode_length, progress=False, spec=spec)
+            batched = evaluate_batched(args.policy, variant.name, n, seed=10_000, envs=n, device=args.device,
+                                       episode_length=args.episode_length, progress=False, spec=spec)
+            report, timing = batched.report, batched.timing
             lo, hi = report.success_ci95
             row = {"episodes": n, "seconds": timing.seconds, "control_steps": timing.control_steps,
                    "episodes_per_min": 60 * n / timing.seconds, "success": report.success_rate, "ci95": [lo, hi],

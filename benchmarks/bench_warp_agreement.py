@@ -42,8 +42,9 @@ def run() -> int:
     cpu = evaluate(args.policy, args.variant, args.episodes, seed=args.seed, cameras=cameras, image_size=size,
                    episode_length=args.episode_length, envs=args.envs, progress=False)
     cpu_s = time.perf_counter() - start
-    warp, timing = evaluate_batched(args.policy, args.variant, args.episodes, seed=args.seed, envs=args.episodes,
-                                    device=args.device, episode_length=args.episode_length, progress=False)
+    batched = evaluate_batched(args.policy, args.variant, args.episodes, seed=args.seed, envs=args.episodes,
+                               device=args.device, episode_length=args.episode_length, progress=False)
+    warp, timing = batched.report, batched.timing
 
     def boxes(episode: dict) -> list[tuple]:
         return [(b["color"], b["outcome"], b["bin"]) for b in episode["boxes"]]

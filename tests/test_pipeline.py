@@ -60,7 +60,10 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path, in_proce
         (2, "tracking", 1000, 2, 2), (2, "tracking-fast", 1000, 2, 2)]
     assert all(r["episodes"] == 1 and r["success_rate"] == 0.0 for r in results["rows"])  # 10 steps sort nothing
     assert [p["step"] for p in results["curve"]] == [1, 2]
-    assert 0 < results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]
+    assert 0 <= results["curve"][0]["minutes"] <= results["curve"][1]["minutes"]  # to 0.1 min: 2 updates take s
+    (run_dir,) = [p for p in (out / "train").iterdir() if p.is_dir()]
+    saved = stages.checkpoints(run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text()))
+    assert [step for step, _, _ in saved] == [1, 2] and 0 < saved[0][1] <= saved[1][1]  # minutes from the run's start
     curve = [p.name for p in (out / "curve").glob("*.json")]  # step 2's point is the full score's
     assert len(curve) == 1 and re.fullmatch(r"demos-2-\w{8}-2steps-\w{8}-seed1000-ens0.2-1-\w{8}\.json", curve[0])
     chose = sorted(p.name for p in (out / "select").glob("*.json"))  # 2 checkpoints x 1 training variant

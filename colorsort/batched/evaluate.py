@@ -19,17 +19,17 @@ import numpy as np
 from tqdm import tqdm
 
 from colorsort.batched.cell import BatchedCell, Record
+from colorsort.batched.films import Filming, FilmViewer, WaveRecording
+from colorsort.batched.kernels import OUTCOMES
+from colorsort.batched.schedule import COLOR_NAMES
 from colorsort.batched.spec import CellSpec, spec_for_variant
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras
+from colorsort.benchmark.report_page import choose_films
 from colorsort.cell.referee import Outcome
-from colorsort.config import BIN_COLORS, COLORS, is_distractor
+from colorsort.config import BIN_COLORS, is_distractor
 from colorsort.errors import ConfigError
 from colorsort.variants import Variant, get_variant
-
-OUTCOMES = list(Outcome)  # kernels' outcome codes index this
-COLOR_NAMES = list(COLORS)
-
 
 
 @dataclass(frozen=True)
@@ -127,8 +127,9 @@ def episode_result(record: Record, world: int, variant: Variant, steps: int, sim
 
 
 def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
-              progress: bool = True) -> tuple[list[dict], WaveTiming]:
-    """Every seed's episode, in waves of ``cell.worlds``; results in seed order."""
+              progress: bool = True, filming: Filming | None = None) -> tuple[list[dict], WaveTiming]:
+    """Every seed's episode, in waves of ``cell.worlds``; results in seed order. With ``filming``, each wave is
+    recorded and the episodes its report may film kept (``films.py``)."""
     n = cell.worlds
     task = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours."
     results: list[dict] = []
@@ -138,6 +139,9 @@ def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds:
         wave = seeds[first : first + n]
         padded = wave + [wave[-1]] * (n - len(wave))  # idle worlds repeat a seed; their results are dropped
         out = cell.reset(padded)
+        recording = WaveRecording(cell) if filming is not None else None
+        if recording is not None:
+            recording.add()
         policy.reset(int(wave[0]))
         ended = np.zeros(n, bool)
         ended[len(wave):] = True
@@ -145,6 +149,8 @@ def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds:
         for step in range(1, max_steps + 1):
             out = cell.step(policy.act(out, task))
             control_steps += 1
+            if recording is not None:
+                recording.add()
             counts = tally(cell.n_events.numpy(), cell.ev_outcome.numpy(), variant.boxes)
             stop = counts["done"] | counts["failed"] | (step >= max_steps)
             new = np.flatnonzero(stop & ~ended)
@@ -156,17 +162,32 @@ def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds:
             ended |= stop
             if ended.all():
                 break
-        results += [finished[w] for w in range(len(wave))]
+        wave_results = [finished[w] for w in range(len(wave))]
+        if filming is not None and recording is not None:
+            filming.wave_ended(recording, wave_results, cell.record())
+        results += wave_results
     bar.close()
     return results, WaveTiming(time.perf_counter() - start, control_steps, n)
 
 
+@dataclass(frozen=True)
+class BatchedEvaluation:
+    """A batched evaluation's report (``metrics.aggregate``'s, as the CPU cell's), its timing, and the films of
+    the episodes its report keeps (seed -> mp4 bytes; empty unless filmed)."""
+
+    report: EvalReport
+    timing: WaveTiming
+    films: dict[int, bytes]
+
+
 def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed: int | None = None,
                      envs: int = 1024, device: str = "cuda:0", episode_length: int | None = None,
-                     progress: bool = True, spec: CellSpec | None = None) -> tuple[EvalReport, WaveTiming]:
+                     progress: bool = True, spec: CellSpec | None = None, film: bool = False,
+                     videos: int | None = None) -> BatchedEvaluation:
     """``episodes`` episodes of a policy on one variant, ``envs`` worlds at once on Warp's ``device``
     ("cpu" or "cuda:0"); the report is ``metrics.aggregate``'s, as for the CPU cell. ``spec`` saves
-    building the variant's cell with robosuite (``CellSpec.load``)."""
+    building the variant's cell with robosuite (``CellSpec.load``). With ``film``, the episodes a report keeps
+    (``report_page.choose_films`` with ``videos``) are filmed as the CPU cell films them."""
     from colorsort.benchmark.evaluate import episode_seeds
 
     if envs < 1:
@@ -180,5 +201,12 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
     spawns = int(np.ceil(max_steps / spec.control_freq / variant.task_config.spawn_period)) + 2
     cell = BatchedCell(spec, variant, min(envs, len(seeds)), device=device, max_boxes=max(variant.boxes + 2, spawns),
                        cameras=policy.cameras, image_size=policy.image_size or (64, 64))
-    results, timing = run_waves(cell, policy, variant, seeds, max_steps, progress)
-    return aggregate(str(policy_spec), variant.name, results), timing
+    filming = Filming(FilmViewer(spec, variant), videos) if film else None
+    results, timing = run_waves(cell, policy, variant, seeds, max_steps, progress, filming)
+    report = aggregate(str(policy_spec), variant.name, results)
+    films: dict[int, bytes] = {}
+    if filming is not None:
+        kept = choose_films([report], {(variant.name, s): s for s in filming.tracks}, videos)
+        films = filming.films([s for _, s in kept], cell.control_dt)
+        filming.viewer.close()
+    return BatchedEvaluation(report, timing, films)

@@ -11,6 +11,8 @@ import warp as wp
 from mujoco_warp._src import math as mjmath
 from mujoco_warp._src.types import vec11
 
+from colorsort.cell.referee import Outcome
+
 PARKED = wp.constant(0)  # BoxStatus order: PARKED, IN_PLAY, IN_BIN
 IN_PLAY = wp.constant(1)
 IN_BIN = wp.constant(2)
@@ -19,6 +21,7 @@ PLACED = wp.constant(0)  # Outcome order: PLACED, MISPLACED, DROPPED, REJECTED
 MISPLACED = wp.constant(1)
 DROPPED = wp.constant(2)
 REJECTED = wp.constant(3)
+OUTCOMES = list(Outcome)  # the outcome codes, on the host
 N_BIN_COLORS = wp.constant(3)  # colours 0..2 (red, green, blue) have bins; 3, 4 (yellow, purple) do not
 
 

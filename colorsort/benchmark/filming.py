@@ -12,7 +12,7 @@ import tempfile
 from pathlib import Path
 
 from colorsort.benchmark.gym_env import ColorSortGymEnv
-from colorsort.cell.referee import describe_box
+from colorsort.cell.referee import Outcome, describe_box
 from colorsort.config import BIN_COLORS
 from colorsort.data.video import VideoWriter, draw_lines
 
@@ -23,22 +23,34 @@ EVENTS_SHOWN = 3  # the latest box events written on the frame
 GOOD, BAD = (120, 255, 120), (255, 110, 110)  # RGB of an event handled right / wrong
 
 
-def overlay_lines(env: ColorSortGymEnv, phase: str | None) -> list[str | tuple[str, tuple[int, int, int]]]:
-    """What the film writes on the current frame."""
+Line = str | tuple[str, tuple[int, int, int]]  # a line of the overlay, white or in a colour (RGB)
+
+
+def overlay_text(time: float, step: int, phase: str | None, bins: dict[str, int], next_box: str | None,
+                 detected: bool, events: list[tuple[float, str, Outcome, str | None]]) -> list[Line]:
+    """What a film writes on a frame: the sim time [s] and control step, the policy's phase (if any), the boxes
+    in each bin, the colour of the next box in play, the ray, and the last ``EVENTS_SHOWN`` of the episode's
+    boxes that left play so far, each (time [s], colour, outcome, bin or None). The CPU cell's films and the
+    batched cell's (``batched/films.py``) both write it."""
+    lines: list[Line] = [
+        f"t {time:5.1f} s  step {step}" + (f"  phase: {phase}" if phase else ""),
+        "bins: " + "  ".join(f"{c} {bins[c]}" for c in BIN_COLORS),
+        f"next box: {next_box or '-'}  ray: {'blocked' if detected else 'clear'}",
+    ]
+    for t, color, outcome, bin in events[-EVENTS_SHOWN:]:
+        lines.append((f"{t:5.1f} s  {describe_box(color, outcome, bin)}", GOOD if outcome.handled_right else BAD))
+    return lines
+
+
+def overlay_lines(env: ColorSortGymEnv, phase: str | None) -> list[Line]:
+    """``overlay_text`` for the CPU cell's episode as it is now."""
     cell = env.env
     counts = cell.task_info()["bins"]
-    lines: list[str | tuple[str, tuple[int, int, int]]] = [
-        f"t {cell.cur_time:5.1f} s  step {env.steps}" + (f"  phase: {phase}" if phase else ""),
-        "bins: " + "  ".join(f"{c} {counts[c]['count']}" for c in BIN_COLORS),
-    ]
     boxes = cell.boxes_in_play()
-    nearest = min(boxes, key=lambda b: b.serial).color if boxes else "-"
-    lines.append(f"next box: {nearest}  ray: {'blocked' if cell.box_detected else 'clear'}")
-    events = cell.events[: env.variant.boxes]
-    for event in events[-EVENTS_SHOWN:]:
-        text = f"{event.time:5.1f} s  {describe_box(event.color, event.outcome, event.bin)}"
-        lines.append((text, GOOD if event.outcome.handled_right else BAD))
-    return lines
+    nearest = min(boxes, key=lambda b: b.serial).color if boxes else None
+    events = [(e.time, e.color, e.outcome, e.bin) for e in cell.events[: env.variant.boxes]]
+    return overlay_text(cell.cur_time, env.steps, phase, {c: counts[c]["count"] for c in BIN_COLORS}, nearest,
+                        cell.box_detected, events)
 
 
 class EpisodeFilm:

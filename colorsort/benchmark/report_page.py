@@ -51,10 +51,11 @@ def episodes_in_order(report: EvalReport) -> list[dict[str, Any]]:
     return sorted(report.per_episode, key=lambda e: (bool(e["success"]), e["seed"]))
 
 
-def choose_films(reports: list[EvalReport], films: dict[tuple[str, int], bytes],
-                 limit: int | None) -> dict[tuple[str, int], bytes]:
-    """The films a report keeps: per variant, failures first then successes, at most ``limit``; with
-    ``limit`` None, every failure and the first ``SUCCESSES_FILMED`` successes."""
+def choose_films[T](reports: list[EvalReport], films: dict[tuple[str, int], T],
+                 limit: int | None) -> dict[tuple[str, int], T]:
+    """The films a report keeps (``films``: mp4 bytes, or what stands for a film not yet drawn, by (variant,
+    seed)): per variant, failures first then successes, at most ``limit``; with ``limit`` None, every failure and
+    the first ``SUCCESSES_FILMED`` successes."""
     kept = {}
     for r in reports:
         order = [e for e in episodes_in_order(r) if (r.variant, e["seed"]) in films]

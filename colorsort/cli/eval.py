@@ -26,7 +26,8 @@ episode (``--videos N`` per variant, failures first; default every failure and 3
 and ``DIR/report.json`` (what ``--json`` writes). Filming changes no result.
 ``--backend warp`` runs the episodes on the batched cell (MuJoCo Warp, the ``gpu`` extra; ``--device``
 cuda:0 by default, cpu for Warp's CPU device), ``--envs`` worlds at once in waves, the policy on the
-same device; it writes the same report and JSON, without films (docs/gpu.md).
+same device; it writes the same report and JSON, its films drawn from the worlds' recorded states by the CPU
+cell's renderer (docs/gpu.md).
 Exit status 0 when it ran, 1 when it failed or was interrupted, 2 for bad arguments.
 """
 
@@ -40,7 +41,7 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
-from colorsort.benchmark.evaluate import observation_settings, run_evaluation
+from colorsort.benchmark.evaluate import Evaluation, observation_settings, run_evaluation
 from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
 from colorsort.benchmark.report_page import SUCCESSES_FILMED, choose_films, write_report
@@ -107,8 +108,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--report {args.report} exists and is not empty; pass --overwrite to replace it")
     if args.device is not None and args.backend != "warp":
         parser.error("--device: only --backend warp runs on a chosen device")
-    if args.backend == "warp" and (args.report or args.executor != "local"):
-        parser.error("--backend warp writes --json, not --report (no films), and runs on one device, not an --executor")
+    if args.backend == "warp" and args.executor != "local":
+        parser.error("--backend warp runs on one device, not on an --executor")
     executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
     cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
     names = variant_names(args.policy, args.variant)
@@ -119,15 +120,16 @@ def main(argv: list[str] | None = None) -> int:
         except ImportError as error:
             raise ConfigError(f"--backend warp needs MuJoCo Warp ({error}): pip install -e '.[gpu]'") from error
 
-        reports = [evaluate_batched(args.policy, name, args.episodes, seed=args.seed, envs=args.envs,
-                                    device=args.device or "cuda:0", episode_length=args.episode_length)[0]
-                   for name in names]
-        evaluation = None
+        batched = [evaluate_batched(args.policy, name, args.episodes, seed=args.seed, envs=args.envs,
+                                    device=args.device or "cuda:0", episode_length=args.episode_length, film=film,
+                                    videos=args.videos) for name in names]
+        evaluation = Evaluation([b.report for b in batched],
+                                {(b.report.variant, seed): video for b in batched for seed, video in b.films.items()})
     else:
         evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
                                     cameras=cameras, episode_length=args.episode_length, executor=executor,
                                     shard_size=args.shard_size, film=film)
-        reports = evaluation.reports
+    reports = evaluation.reports
     print(format_report(reports[0]) if args.variant != "all" else f"policy {args.policy}\n" + format_table(reports))
     found = [asdict(r) for r in reports]
     payload = found if args.variant == "all" else found[0]
@@ -135,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(payload, indent=1))
         print(f"metrics: {args.json}")
-    if args.report and evaluation is not None:
+    if args.report:
         if args.overwrite:
             shutil.rmtree(args.report, ignore_errors=True)
         kept = choose_films(reports, evaluation.films, args.videos)
