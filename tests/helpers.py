@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import logging
 import os
+import subprocess
 import sys
 from contextlib import redirect_stderr, redirect_stdout
 from importlib.metadata import entry_points
@@ -111,20 +112,20 @@ def exit_status(main, argv: list[str]) -> int:
         return stop.code
 
 
-def lerobot_cli(program: str, argv: list[str], cwd: Path) -> tuple[int, str]:
-    """LeRobot's console script ``program`` (``lerobot-train``, ``lerobot-eval``, ...) with ``argv``, in ``cwd``:
-    (exit status, what it printed). Run by the entry point the script calls, in this process: the same code path
-    without a new interpreter (LeRobot's imports alone take 10 to 15 s here). Its logging set-up (which replaces
-    the root logger's handlers), ``sys.argv`` and the working directory are put back afterwards. README's own
-    commands run as real processes (test_lerobot_cli)."""
+def console_script(program: str, argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    """The console script ``program`` (ColorSort's ``colorsort-*``, LeRobot's ``lerobot-*``) with ``argv``, in
+    ``cwd``, as ``subprocess.run`` reports it (exit status, stdout, stderr): run by the entry point the script
+    calls, in this process, the same code path without a new interpreter (LeRobot's imports alone take 10 to 15 s
+    here). Its logging set-up (LeRobot's replaces the root logger's handlers), ``sys.argv`` and the working
+    directory are put back afterwards. README's own commands run as real processes."""
     (entry,) = entry_points(group="console_scripts", name=program)
     root = logging.getLogger()
     handlers, level, argv0, here = root.handlers[:], root.level, sys.argv, os.getcwd()
-    output = io.StringIO()
+    out, err = io.StringIO(), io.StringIO()
     sys.argv = [program, *argv]
     try:
         os.chdir(cwd)
-        with redirect_stdout(output), redirect_stderr(output):
+        with redirect_stdout(out), redirect_stderr(err):
             try:
                 status = entry.load()() or 0
             except SystemExit as stop:
@@ -134,4 +135,10 @@ def lerobot_cli(program: str, argv: list[str], cwd: Path) -> tuple[int, str]:
         sys.argv = argv0
         root.handlers[:] = handlers
         root.setLevel(level)
-    return status, output.getvalue()
+    return subprocess.CompletedProcess([program, *argv], status, out.getvalue(), err.getvalue())
+
+
+def lerobot_cli(program: str, argv: list[str], cwd: Path) -> tuple[int, str]:
+    """``console_script`` for LeRobot's CLIs: (exit status, everything it printed)."""
+    done = console_script(program, argv, cwd)
+    return done.returncode, done.stdout + done.stderr

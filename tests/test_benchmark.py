@@ -1,15 +1,13 @@
 """The benchmark: Gymnasium ids, variants, the evaluation harness, and LeRobot policies on the task."""
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from helpers import exit_status
+from helpers import console_script, exit_status
 
 from colorsort.benchmark.evaluate import evaluate
 from colorsort.benchmark.gym_env import ColorSortGymEnv
@@ -19,7 +17,6 @@ from colorsort.config import BIN_COLORS, COLORS, Lighting
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
-ANALYZE = str(Path(sys.executable).parent / "colorsort-analyze")
 REPO = Path(__file__).resolve().parent.parent
 
 
@@ -170,8 +167,7 @@ def test_outcomes_by_pose_counts_each_band(tmp_path):
              {"outcome": "misplaced", "offset": 0.03, "yaw": 45.0}, {"outcome": "dropped", "offset": 0.01, "yaw": 29.0},
              {"outcome": "let_through", "offset": 0.0, "yaw": 0.0}]
     (tmp_path / "eval.json").write_text(json.dumps({"per_episode": [{"boxes": boxes}]}))
-    out = subprocess.run([ANALYZE, "by-pose", "eval.json"], cwd=tmp_path,
-                         capture_output=True, text=True, timeout=60)
+    out = console_script("colorsort-analyze", ["by-pose", "eval.json"], tmp_path)
     assert out.returncode == 0, out.stderr
     rows = out.stdout.splitlines()[3:]
     assert rows[:3] == ["| turned 0 to 15 deg | 1 | 0 (0%) | 0 |", "| turned 15 to 30 deg | 2 | 1 (50%) | 1 |",
@@ -191,21 +187,18 @@ def test_outcomes_by_lights_bands_episodes_by_the_lights_their_cameras_saw(tmp_p
     (tmp_path / "a.json").write_text(json.dumps({"variant": "lighting", "per_episode": episodes[:2]}))
     (tmp_path / "b.json").write_text(json.dumps({"variant": "lighting", "per_episode": episodes[2:]}))
     (tmp_path / "c.json").write_text(json.dumps({"variant": "default", "per_episode": episodes[:1]}))
-    out = subprocess.run([ANALYZE, "by-lights", "a.json", "b.json"], cwd=tmp_path, capture_output=True, text=True,
-                         timeout=120)
+    out = console_script("colorsort-analyze", ["by-lights", "a.json", "b.json"], tmp_path)
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines()[3:] == ["| brightness 0.5 to 0.65 | 1 | 0 (0%) | 0 | 1 |",
                                            "| brightness 0.65 to 0.8 | 0 | 0 (-) | 0 | 0 |",
                                            "| brightness 0.8 to 1 | 0 | 0 (-) | 0 | 0 |",
                                            "| brightness 1 to 1.6 | 2 | 1 (50%) | 1 | 0 |"]
-    mixed = subprocess.run([ANALYZE, "by-lights", "a.json", "c.json"], cwd=tmp_path, capture_output=True,
-                           text=True, timeout=60)
+    mixed = console_script("colorsort-analyze", ["by-lights", "a.json", "c.json"], tmp_path)
     assert mixed.returncode == 2 and "one variant" in mixed.stderr
     (tmp_path / "demos" / "meta").mkdir(parents=True)  # a collection from seed 10000 that kept episodes 1 and 8
     (tmp_path / "demos" / "meta" / "colorsort.json").write_text(json.dumps(
         {"settings": {"variant": "lighting", "seed": 10000}, "episodes": [1, 8]}))
-    demos = subprocess.run([ANALYZE, "by-lights", "--demos", "demos"], cwd=tmp_path, capture_output=True,
-                           text=True, timeout=120)
+    demos = console_script("colorsort-analyze", ["by-lights", "--demos", "demos"], tmp_path)
     assert demos.returncode == 0, demos.stderr
     first, second = map(float, demos.stdout.split("brightness: ")[1].split(", "))
     assert first >= 1.0 and 0.5 <= second < 0.65  # the bands above put these seeds in the brightest and dimmest
@@ -221,8 +214,7 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
              {"outcome": "misplaced", "offset": 0.01, "yaw": 10.0, "grip_offset": 0.012, "grip_yaw": 8.0},
              {"outcome": "dropped", "offset": 0.0, "yaw": 0.0, "grip_offset": None, "grip_yaw": None}]
     (tmp_path / "eval.json").write_text(json.dumps({"per_episode": [{"boxes": boxes}]}))
-    out = subprocess.run([ANALYZE, "by-pose", "eval.json"], cwd=tmp_path,
-                         capture_output=True, text=True, timeout=60)
+    out = console_script("colorsort-analyze", ["by-pose", "eval.json"], tmp_path)
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
     assert ("how the cup held the 3 boxes it picked: gripped off axis median 12.0 mm, 90th percentile 26.0 mm; "

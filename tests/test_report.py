@@ -5,11 +5,11 @@ import re
 import shlex
 import shutil
 import subprocess
-import sys
 from dataclasses import asdict
 from pathlib import Path
 
 import pytest
+from helpers import console_script
 
 from colorsort.benchmark.evaluate import run_evaluation
 from colorsort.benchmark.metrics import aggregate
@@ -29,16 +29,15 @@ def documented_report_command() -> list[str]:
 
 
 def short(argv: list[str], out: Path) -> list[str]:
-    """The documented command on 2 short episodes, writing its report to ``out``."""
+    """The documented command's arguments on 2 short episodes, writing its report to ``out``."""
     args = argv[1:]
     args[args.index("--episodes"):args.index("--episodes") + 2] = SHORT
     args[args.index("--report") + 1] = str(out)
-    return [sys.executable, "-m", "colorsort.cli.eval", *args]
+    return args
 
 
 def eval_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "colorsort.cli.eval", *args], capture_output=True, text=True,
-                          cwd=cwd, timeout=600)
+    return console_script("colorsort-eval", list(args), cwd)
 
 
 @pytest.mark.slow
@@ -91,8 +90,8 @@ def test_report_arguments_that_make_no_sense_are_refused_and_an_old_report_is_ke
 def report(tmp_path_factory):
     """The documented report command on 2 short episodes (both time out: failures), with --json beside."""
     out = tmp_path_factory.mktemp("report") / "report"
-    argv = short(documented_report_command(), out) + ["--json", str(out.parent / "eval.json"), "--envs", "2"]
-    done = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT, timeout=600)
+    args = short(documented_report_command(), out) + ["--json", str(out.parent / "eval.json"), "--envs", "2"]
+    done = console_script("colorsort-eval", args, ROOT)
     assert done.returncode == 0, done.stderr[-3000:]
     assert f"report: {out / 'index.html'} (2 videos)" in done.stdout
     return out

@@ -5,8 +5,8 @@ import json
 from pathlib import Path
 
 import pytest
-from baseline_common import BIN, SHIPPED, run, score_row, scores
-from helpers import lerobot_cli
+from baseline_common import SHIPPED, score_row, scores
+from helpers import console_script, lerobot_cli
 
 from colorsort.cli.eval import main as eval_main
 
@@ -170,12 +170,11 @@ def test_first_box_delay_is_the_median_over_the_seeds_both_runs_placed_a_box(tmp
     old = evaluation({1: [(7.0, "placed")], 2: [(8.0, "placed")], 3: [(8.0, "dropped")]})
     (tmp_path / "new.json").write_text(json.dumps(new))
     (tmp_path / "old.json").write_text(json.dumps(old))
-    out = run([str(BIN / "colorsort-analyze"), "first-box-delay", "new.json", "old.json"], tmp_path, timeout=60)
+    out = console_script("colorsort-analyze", ["first-box-delay", "new.json", "old.json"], tmp_path)
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("first box placed +0.75 s later (median over 2 seeds, default)")
     (tmp_path / "other.json").write_text(json.dumps(evaluation({9: [(7.0, "placed")]})))
-    refused = run([str(BIN / "colorsort-analyze"), "first-box-delay", "new.json", "other.json"], tmp_path,
-                  timeout=60)
+    refused = console_script("colorsort-analyze", ["first-box-delay", "new.json", "other.json"], tmp_path)
     assert refused.returncode == 2 and "no evaluation seed where both runs placed a box" in refused.stderr
 
 
@@ -189,7 +188,7 @@ def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
     old = scores([row("seed", 0.25, 10, 12)])
     for name, run_scores in (("new.json", new), ("old.json", old)):
         (tmp_path / name).write_text(json.dumps(run_scores))
-    out = run([str(BIN / "colorsort-analyze"), "compare", "new.json", "old.json", "--labels", "a,b"], tmp_path, 60)
+    out = console_script("colorsort-analyze", ["compare", "new.json", "old.json", "--labels", "a,b"], tmp_path)
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
     assert lines[0].startswith("| variant | a: mean (each seed) | b: mean (each seed) |")
