@@ -16,9 +16,9 @@ import colorsort  # noqa: E402,F401  (registers the task)
 # first: each stays on one worker (--dist loadfile), and a long one started last kept the other worker idle for
 # minutes at the end. The Makefile's --no-loadscope-reorder keeps this order (xdist's own puts the modules with the
 # most tests first).
-LONGEST_FIRST = ("test_scale", "test_batched", "test_lerobot_cli", "test_pipeline", "test_benchmark", "test_shipped",
-                 "test_collect", "test_crashes", "test_demos", "test_clients", "test_takeover", "test_expert",
-                 "test_tracking", "test_report")
+LONGEST_FIRST = ("test_scale", "test_batched", "test_lerobot_cli", "test_benchmark", "test_collect", "test_clients",
+                 "test_crashes", "test_tracking", "test_pipeline", "test_demos", "test_expert", "test_takeover",
+                 "test_report", "test_shipped")
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
