@@ -1,16 +1,14 @@
 """What the learned baselines' test modules share: the shipped policies, a subprocess runner, the pipeline's stages
 run in the test's process, scores rows."""
 
-import importlib
 import os
 import shlex
 import subprocess
 import sys
 import time
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
-from helpers import lerobot_cli
+from helpers import console_script
 
 from colorsort.errors import StageError
 
@@ -42,25 +40,14 @@ def scores(rows: list[dict], recipe: dict | None = None) -> dict:
     return {"recipe": recipe or {"cameras": []}, "command": "cmd", "started": "then", "wall_s": 1.0, "rows": rows}
 
 
-# ColorSort's own console scripts, by name: the pipeline's stages that tests run in this process
-MAINS = {"colorsort-collect": "colorsort.cli.collect", "colorsort-eval": "colorsort.cli.eval",
-         "colorsort-takeover": "colorsort.cli.takeover"}
-
-
 def run_in_process(cmd: list[str], log: Path) -> float:
     """``stages.run`` without a new interpreter (seconds of imports each: LeRobot's alone take 10 to 15 s here): the
-    same arguments to the same entry point (ColorSort's ``main``, LeRobot's ``lerobot-train``), its output to
-    ``log``."""
-    name = Path(cmd[0]).name
+    same arguments to the same console script's entry point (``helpers.console_script``), its output to ``log``."""
     print("$ " + shlex.join(cmd), flush=True)
     log.parent.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    if name in MAINS:
-        with log.open("w") as f, redirect_stdout(f), redirect_stderr(f):
-            status = importlib.import_module(MAINS[name]).main(cmd[1:])
-    else:
-        status, output = lerobot_cli(name, cmd[1:], Path.cwd())
-        log.write_text(output)
-    if status != 0:
-        raise StageError(f"exit code {status}: {shlex.join(cmd)}\n{log.read_text()[-3000:]}")
+    done = console_script(Path(cmd[0]).name, cmd[1:], Path.cwd())
+    log.write_text(done.stdout + done.stderr)
+    if done.returncode != 0:
+        raise StageError(f"exit code {done.returncode}: {shlex.join(cmd)}\n{log.read_text()[-3000:]}")
     return time.perf_counter() - started

@@ -137,8 +137,3 @@ def console_script(program: str, argv: list[str], cwd: Path) -> subprocess.Compl
         root.setLevel(level)
     return subprocess.CompletedProcess([program, *argv], status, out.getvalue(), err.getvalue())
 
-
-def lerobot_cli(program: str, argv: list[str], cwd: Path) -> tuple[int, str]:
-    """``console_script`` for LeRobot's CLIs: (exit status, everything it printed)."""
-    done = console_script(program, argv, cwd)
-    return done.returncode, done.stdout + done.stderr

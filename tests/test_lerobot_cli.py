@@ -3,7 +3,7 @@
 The commands are read from docs/benchmark.md and docs/data.md, the pages that show them, so a test
 that passes means the documented command works. README's lerobot-train and lerobot-eval and lerobot-dataset-viz
 run as processes of their own, as a user runs them; the docs' other LeRobot commands by their console script's entry
-point in the test's process (``helpers.lerobot_cli``: the same code without 10 to 15 s of LeRobot's imports each).
+point in the test's process (``helpers.console_script``: the same code without 10 to 15 s of LeRobot's imports each).
 
 Only what the docs say may change is changed: the
 training length, batch and data-loading processes (``--steps``, ``--batch_size``, ``--num_workers=0``: each
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import lerobot_cli
+from helpers import console_script
 
 from colorsort.benchmark.evaluate import evaluate
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
@@ -207,8 +207,8 @@ def test_documented_command_makes_a_state_only_copy_of_a_dataset_with_cameras(ti
 
     shutil.copytree(tiny_dataset, tmp_path / "datasets" / "colorsort")
     argv = documented_command("lerobot-edit-dataset")
-    status, printed = lerobot_cli(argv[0], argv[1:], tmp_path)
-    assert status == 0, printed[-3000:]
+    done = console_script(argv[0], argv[1:], tmp_path)
+    assert done.returncode == 0, (done.stdout + done.stderr)[-3000:]
     original = LeRobotDataset("local/colorsort", root=tmp_path / "datasets" / "colorsort", video_backend="pyav")
     state_only = LeRobotDataset("local/colorsort-state", root=tmp_path / "datasets" / "colorsort-state")
     assert original.meta.video_keys and state_only.meta.video_keys == []
@@ -225,9 +225,9 @@ def test_lerobot_eval_records_rollouts_as_datasets_that_colorsort_replay_explain
 
     argv = replace_flag(documented_command("lerobot-eval", "--eval.recording=true"), "--eval.n_episodes", "2")
     argv.insert(1, "--env.discover_packages_path=colorsort")  # the pre-0.6 way keeps working
-    status, printed = lerobot_cli(argv[0], argv[1:] + ["--env.episode_length=30", "--eval.use_async_envs=false"],
-                                  readme_checkpoint)
-    assert status == 0, printed[-3000:]
+    done = console_script(argv[0], argv[1:] + ["--env.episode_length=30", "--eval.use_async_envs=false"],
+                          readme_checkpoint)
+    assert done.returncode == 0, (done.stdout + done.stderr)[-3000:]
     root = readme_checkpoint / "outputs/eval/recorded/recordings/colorsort_0"
     for i in range(2):
         ds = LeRobotDataset(f"eval_recording_env_{i}", root=root / f"env_{i}", video_backend="pyav")
@@ -265,9 +265,8 @@ def test_lerobot_trains_a_diffusion_policy_on_colorsort_that_colorsort_eval_runs
     collect = replace_flag(documented_command("colorsort-collect", "--cameras none"), "--episodes", "2")
     assert collect_main(replace_flag(collect, "--boxes-per-episode", "1")[1:]) == 0
     train = replace_flag(documented_command("lerobot-train", "--policy.type=diffusion"), "--steps", "2")
-    status, printed = lerobot_cli(train[0], replace_flag(train, "--batch_size", "2")[1:] + ["--num_workers=0"],
-                                  tmp_path)
-    assert status == 0, printed[-3000:]
+    done = console_script(train[0], replace_flag(train, "--batch_size", "2")[1:] + ["--num_workers=0"], tmp_path)
+    assert done.returncode == 0, (done.stdout + done.stderr)[-3000:]
     config = json.loads((tmp_path / "outputs/train/diffusion-state/checkpoints/last/pretrained_model/config.json")
                         .read_text())
     assert config["type"] == "diffusion" and config["down_dims"] == [128, 256]

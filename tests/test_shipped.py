@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 from baseline_common import SHIPPED, score_row, scores
-from helpers import console_script, lerobot_cli
+from helpers import console_script
 
 from colorsort.cli.eval import main as eval_main
 
@@ -45,12 +45,12 @@ def test_a_shipped_baseline_runs_in_lerobot_eval(name, tmp_path):
 
     cameras, size = checkpoint_cameras(SHIPPED[name])
     task = "ColorSort-Tracking-v0" if "tracking" in name else "ColorSort-Default-v0"
-    status, printed = lerobot_cli("lerobot-eval", [
+    done = console_script("lerobot-eval", [
         "--env.type=colorsort", f"--env.task={task}", f"--env.cameras={','.join(cameras) or 'none'}",
         f"--env.image_size={size[0] if size else 128}", f"--policy.path={SHIPPED[name]}", "--policy.device=cpu",
         "--eval.n_episodes=1", "--eval.batch_size=1", "--env.episode_length=30", f"--output_dir={tmp_path / 'eval'}"],
         tmp_path)
-    assert status == 0, printed[-3000:]
+    assert done.returncode == 0, (done.stdout + done.stderr)[-3000:]
     overall = json.loads((tmp_path / "eval" / "eval_info.json").read_text())["overall"]
     assert overall["n_episodes"] == 1 and 0 <= overall["pc_success"] <= 100
 

@@ -164,7 +164,7 @@ def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds:
                 break
         wave_results = [finished[w] for w in range(len(wave))]
         if filming is not None and recording is not None:
-            filming.wave_ended(recording, wave_results, cell.record())
+            filming.wave_ended(recording, wave_results)
         results += wave_results
     bar.close()
     return results, WaveTiming(time.perf_counter() - start, control_steps, n)
@@ -207,6 +207,6 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
     films: dict[int, bytes] = {}
     if filming is not None:
         kept = choose_films([report], {(variant.name, s): s for s in filming.tracks}, videos)
-        films = filming.films([s for _, s in kept], cell.control_dt)
+        films = filming.films([s for _, s in kept])
         filming.viewer.close()
     return BatchedEvaluation(report, timing, films)

@@ -18,14 +18,17 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import torch
+import warp as wp
 
-from colorsort.batched.cell import BatchedCell, Record
-from colorsort.batched.kernels import IN_BIN, IN_PLAY, OUTCOMES
+from colorsort.batched.cell import BatchedCell
+from colorsort.batched.kernels import IN_BIN, IN_PLAY
 from colorsort.batched.schedule import COLOR_NAMES, episode_draws
 from colorsort.batched.spec import CellSpec
 from colorsort.benchmark.filming import FILM_CAMERA, FILM_SIZE, overlay_text
 from colorsort.benchmark.report_page import SUCCESSES_FILMED
 from colorsort.cell.lighting import LightRig
+from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, COLORS
 from colorsort.data.video import VideoWriter, draw_lines
 from colorsort.errors import ConfigError
@@ -57,43 +60,40 @@ class WaveRecording:
 
     def add(self) -> None:
         """The cell as it is now (after a reset or a control step)."""
-        import torch
-        import warp as wp
-
         c = self.cell
         small = lambda a: wp.to_torch(a).to(torch.int16)  # noqa: E731  (codes, colours, serials, bins: small)
         self.frames.append((wp.to_torch(c.d.qpos).clone(), small(c.status), small(c.color), small(c.serial),
                             small(c.bin_of), wp.to_torch(c.detected).to(torch.bool)))
 
-    def keep(self, worlds: list[int], ends: list[int], record: Record, boxes: int) -> list[WorldTrack]:
-        """The tracks of ``worlds``, world ``worlds[i]`` up to its episode's last step ``ends[i]``; ``record``
-        (the wave's) gives the first ``boxes`` boxes that left play."""
-        import torch
-
+    def keep(self, worlds: list[int], results: list[dict]) -> list[WorldTrack]:
+        """The tracks of ``worlds``, world ``worlds[i]`` up to the last step of its episode ``results[i]``
+        (``evaluate.episode_result``'s dict, whose boxes give the events)."""
+        index = torch.as_tensor(worlds, dtype=torch.long, device=self.frames[0][0].device)
+        rows = [torch.stack([f[k][index] for f in self.frames]).cpu().numpy() for k in range(6)]  # (T, worlds, ...)
         tracks = []
-        for w, end in zip(worlds, ends, strict=True):
-            rows = [torch.stack([f[k][w] for f in self.frames[: end + 1]]).cpu().numpy() for k in range(6)]
-            events = [(t, COLOR_NAMES[c], OUTCOMES[o], BIN_COLORS[b] if b >= 0 else None)
-                      for t, _, c, o, b in record.events(w)[:boxes]]
-            tracks.append(WorldTrack(int(self.cell.seeds[w]), events, rows[0].astype(np.float64), *rows[1:]))
+        for i, result in enumerate(results):
+            end = result["steps"] + 1
+            events = [(b["time"], b["color"], Outcome(b["outcome"]), b["bin"]) for b in result["boxes"]]
+            qpos, *per_box = (r[:end, i] for r in rows)
+            tracks.append(WorldTrack(result["seed"], events, qpos.astype(np.float64), *per_box))
         return tracks
 
 
-def wanted(results: list[dict], limit: int | None, have: tuple[int, int]) -> list[int]:
+def wanted(results: list[dict], limit: int | None, have: tuple[int, int]) -> tuple[list[int], tuple[int, int]]:
     """Which of a wave's episode results (seed order) a report may still keep, given the failures and successes
-    kept from earlier waves (``have``): ``choose_films``'s order, failures first, successes by seed."""
+    kept from earlier waves (``have``), and the counts with them: ``choose_films``'s order, failures first,
+    successes by seed."""
     failures, successes = have
-    keep_failures = None if limit is None else limit
     keep_successes = SUCCESSES_FILMED if limit is None else limit
     chosen = []
     for i, r in enumerate(results):
-        if not r["success"] and (keep_failures is None or failures < keep_failures):
+        if not r["success"] and (limit is None or failures < limit):
             chosen.append(i)
             failures += 1
         elif r["success"] and successes < keep_successes:
             chosen.append(i)
             successes += 1
-    return chosen
+    return chosen, (failures, successes)
 
 
 class FilmViewer:
@@ -109,7 +109,7 @@ class FilmViewer:
         from colorsort.benchmark.gym_env import ColorSortGymEnv
 
         self.spec, self.variant, self.size = spec, variant, size
-        self.env = ColorSortGymEnv(variant.name, cameras=(), render_mode="rgb_array")
+        self.env = ColorSortGymEnv(variant.name, cameras=(), render_mode="rgb_array", fps=round(spec.control_freq))
         self.cell = self.env.env
         model = self.cell.sim.model._model
         if (model.nq, model.ngeom) != (spec.model.nq, spec.model.ngeom):
@@ -119,8 +119,8 @@ class FilmViewer:
         self.palette = np.array(list(COLORS.values()))
         self.fps = self.env.fps
 
-    def film(self, track: WorldTrack, control_dt: float) -> bytes:
-        """The mp4 bytes of ``track``, a frame per control step of ``control_dt`` [s]."""
+    def film(self, track: WorldTrack) -> bytes:
+        """The mp4 bytes of ``track``, a frame per control step."""
         model, data = self.cell.sim.model._model, self.cell.sim.data._data
         self.rig.apply(episode_draws(self.variant, track.seed, 1).lighting)
         geoms = np.asarray(self.spec.box_geom)
@@ -133,7 +133,7 @@ class FilmViewer:
                     model.geom_rgba[geoms] = self.palette[track.color[k]]
                     self.cell.sim.forward()
                     frame = self.cell.camera_image(FILM_CAMERA, w, h)
-                    writer.write(draw_lines(frame, self._overlay(track, k, k * control_dt)))
+                    writer.write(draw_lines(frame, self._overlay(track, k, k / self.fps)))
             finally:
                 writer.close()
             return writer.path.read_bytes()
@@ -165,15 +165,13 @@ class Filming:
         self.tracks: dict[int, WorldTrack] = {}  # seed -> track
         self.kept = (0, 0)  # failures, successes
 
-    def wave_ended(self, recording: WaveRecording, results: list[dict], record: Record) -> None:
+    def wave_ended(self, recording: WaveRecording, results: list[dict]) -> None:
         """Keep what the report may want of a wave whose worlds ``0..len(results)-1`` ran ``results``."""
-        chosen = wanted(results, self.limit, self.kept)
-        ends = [results[i]["steps"] for i in chosen]
-        for track in recording.keep(chosen, ends, record, self.viewer.variant.boxes):
-            self.tracks[track.seed] = track
-        failures = sum(not results[i]["success"] for i in chosen)
-        self.kept = (self.kept[0] + failures, self.kept[1] + len(chosen) - failures)
+        chosen, self.kept = wanted(results, self.limit, self.kept)
+        if chosen:
+            for track in recording.keep(chosen, [results[i] for i in chosen]):
+                self.tracks[track.seed] = track
 
-    def films(self, seeds: list[int], control_dt: float) -> dict[int, bytes]:
-        """The mp4 bytes of the kept episodes among ``seeds``, by seed."""
-        return {seed: self.viewer.film(self.tracks[seed], control_dt) for seed in seeds if seed in self.tracks}
+    def films(self, seeds: list[int]) -> dict[int, bytes]:
+        """The mp4 bytes of the kept episodes ``seeds``, by seed."""
+        return {seed: self.viewer.film(self.tracks[seed]) for seed in seeds}
