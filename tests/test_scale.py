@@ -1,6 +1,7 @@
 """Collection and evaluation on Ray: the same data and numbers as on local processes, a killed worker retried, a
-cancel that stops a task or reports it stopped, SLURM's batch script, the docs' Ray commands. One Ray cluster (2 CPUs)
-for the module."""
+cancel that stops a task or reports it stopped, Ctrl-C, SLURM's batch script, the docs' Ray commands. One Ray cluster
+(2 CPUs) for the module, started by this process; its workers, once they have imported ColorSort and LeRobot, serve
+every test after the first that uses it (a new process joining would be a new Ray job with workers of its own)."""
 
 import json
 import os
@@ -9,13 +10,14 @@ import shlex
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
 import pytest
 from scale_common import QUIET, SCALE, kill_worker_of, same_episodes
 
-from colorsort.benchmark.evaluate import evaluate, run_evaluation
+from colorsort.benchmark.evaluate import run_evaluation
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
 from colorsort.data.store import MARKER
@@ -43,9 +45,9 @@ def documented_ray_command(program: str) -> list[str]:
     return shlex.split(line)
 
 
-def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_docs_collect_command(tmp_path):
+def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_docs_eval_command(tmp_path):
     """The batch script on a one-node stand-in for SLURM (srun runs its command here, scontrol names this host),
-    its command the docs' colorsort-collect on Ray, verbatim: a Ray head starts and the command records there.
+    its command the docs' colorsort-eval on Ray, verbatim: a Ray head starts and the expert's episodes run there.
     First in the module: its head is the only Ray cluster on the machine (the module's starts after it)."""
     shims = tmp_path / "bin"
     shims.mkdir()
@@ -57,13 +59,13 @@ def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_docs_collect_comm
         shim.chmod(0o755)
     script = tmp_path / "job.sbatch"
     subprocess.run([str(Path(sys.executable).parent / "colorsort-slurm"), "--nodes", "1", "--cpus-per-node", "2",
-                    "--port", "6391", "--out", str(script), "--", *documented_ray_command("colorsort-collect")],
+                    "--port", "6391", "--out", str(script), "--", *documented_ray_command("colorsort-eval")],
                    check=True, capture_output=True)
     env = {**os.environ, "PATH": f"{shims}:{os.environ['PATH']}", "SLURM_JOB_NODELIST": "node1"}
     job = subprocess.run(["bash", str(script)], env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert job.returncode == 0, job.stdout[-3000:] + job.stderr[-3000:]
-    assert "on 2 ray workers; retried 0" in job.stdout
-    assert json.loads((tmp_path / "datasets/colorsort-ray" / MARKER).read_text())["episodes"] == [0, 1]
+    assert "--address" in script.read_text() and "ray start --head" in script.read_text()
+    assert re.search(r"episodes\s+2\b", job.stdout) and re.search(r"success rate\s+100\.0%", job.stdout), job.stdout
 
 
 def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(reference, cluster, tmp_path):
@@ -107,14 +109,9 @@ def test_a_task_its_cancel_does_not_stop_is_reported_stopped_never_ok(cluster):
     assert time.monotonic() - started < 60
 
 
-def test_evaluation_on_ray_gives_the_same_numbers_as_local(cluster):
-    kwargs = dict(episodes=2, image_size=(32, 32), cameras=("scene",), progress=False)
-    local = evaluate("expert", "default", **kwargs, envs=1)
-    spread = evaluate("expert", "default", **kwargs, executor=ExecutorConfig("ray", 2), shard_size=1)
-    assert local.successes == 2 and local == spread
-
-
-def test_a_filmed_evaluation_on_ray_films_each_episode_where_it_runs(cluster, tmp_path):
+def test_an_evaluation_on_ray_gives_the_local_numbers_and_films_each_episode_where_it_runs(cluster, tmp_path):
+    """Every episode's report (outcomes, boxes, cycle times) as on this process; its film made in the Ray worker.
+    Whole episodes on Ray, the expert sorting all: the SLURM test's docs command."""
     kwargs = dict(episodes=2, image_size=(32, 32), cameras=("scene",), progress=False, episode_length=30)
     local = run_evaluation("expert", ["default"], **kwargs)
     spread = run_evaluation("expert", ["default"], **kwargs, executor=ExecutorConfig("ray", 2), shard_size=1,
@@ -126,38 +123,46 @@ def test_a_filmed_evaluation_on_ray_films_each_episode_where_it_runs(cluster, tm
         assert video[4:8] == b"ftyp" and len(read_video(tmp_path / f"{seed}.mp4")) == 31
 
 
-def test_the_docs_evaluation_on_ray_works_as_written(cluster, tmp_path, monkeypatch, capsys):
-    """docs/scaling.md's colorsort-eval on Ray, its argv to the console script's ``main`` in this process: it runs
+def test_the_docs_collection_on_ray_works_as_written(cluster, tmp_path, monkeypatch, capsys):
+    """docs/scaling.md's colorsort-collect on Ray, its argv to the console script's ``main`` in this process: it runs
     on the module's cluster (as on any cluster ``ray.init`` finds; starting one: the SLURM test's head)."""
-    from colorsort.cli.eval import main
+    from colorsort.cli.collect import main
 
-    argv = documented_ray_command("colorsort-eval")
+    argv = documented_ray_command("colorsort-collect")
     monkeypatch.chdir(tmp_path)
     assert main(argv[1:]) == 0
-    out = capsys.readouterr().out
-    assert re.search(r"episodes\s+2\b", out) and re.search(r"success rate\s+100\.0%", out), out
+    assert "on 2 ray workers; retried 0" in capsys.readouterr().out
+    out = tmp_path / argv[argv.index("--out") + 1]
+    assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]
 
 
-def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster, reference, tmp_path):
-    """Ctrl-C to a collection whose tasks run on Ray (a process of its own, joining the module's cluster): every
+def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster, reference, tmp_path, capsys):
+    """Ctrl-C (SIGINT to this process, Python's own handler) to colorsort-collect whose tasks run on Ray: every
     finished episode is kept and it says so; --resume on the same cluster completes the dataset. (Local processes:
     test_collect's interrupted runs.) One shard of 4 episodes on one Ray worker: the interrupt comes when the first
     is saved, 3 to go (with 2 to go, a loaded CI machine once finished them all before the interrupt took effect)."""
+    from colorsort.cli.collect import main
+
     out = tmp_path / "ds"
     argv = ["--out", str(out), "--episodes", "4", "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "4",
             "--workers", "1", "--executor", "ray"]
-    # SIGINT as a terminal's Ctrl-C delivers it, even where this test runs with SIGINT ignored (a background job)
-    run = subprocess.Popen([sys.executable, "-m", "colorsort.cli.collect", *argv, "--address", cluster],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     staging = tmp_path / ".ds.staging"
-    deadline = time.monotonic() + 300
-    while not list(staging.glob("shard-*/meta/tasks.parquet")) and time.monotonic() < deadline:
-        time.sleep(0.05)  # LeRobot writes tasks.parquet when a shard saves its first episode
-    run.send_signal(signal.SIGINT)
-    stdout, stderr = run.communicate(timeout=300)
-    assert run.returncode == 130, stderr[-3000:]
-    assert "interrupted: every finished episode is saved" in stdout
+
+    def ctrl_c():  # LeRobot writes tasks.parquet when a shard saves its first episode
+        deadline = time.monotonic() + 300
+        while not list(staging.glob("shard-*/meta/tasks.parquet")) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal, even in a background job
+    try:
+        watcher = threading.Thread(target=ctrl_c, daemon=True)
+        watcher.start()
+        assert main(argv) == 130
+        watcher.join()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert "interrupted: every finished episode is saved" in capsys.readouterr().out
     marker = json.loads((out / MARKER).read_text())
     assert 1 <= len(marker["episodes"]) < 4 and set(marker["episodes"]) == set(marker["tried"])
 
