@@ -1,6 +1,7 @@
 """Shared fixtures: headless rendering, offline hub, envs that are closed whatever the test's outcome."""
 
 import os
+from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
@@ -54,23 +55,9 @@ def env():
     e.close()
 
 
-@pytest.fixture(scope="session")
-def tiny_dataset(tmp_path_factory):
-    """Two one-box episodes of the expert, 64x64 scene and wrist cameras, recorded once per session."""
-    from colorsort.data.collect import collect
-    from colorsort.data.config import CollectConfig
-
-    root = tmp_path_factory.mktemp("datasets") / "tiny"
-    summary = collect(CollectConfig(out=str(root), **TINY), progress=False, log=lambda _: None)
-    assert summary.kept == 2 and not summary.errors, summary
-    return root
-
-
-# the scale and crash tests' reference dataset: recorded once per run, by whichever worker asks first
-@pytest.fixture(scope="session")
-def reference(tmp_path_factory):
-    """``scale_common.SCALE``'s collection recorded in this process, one shard, no engine. Shared by pytest-xdist's
-    workers through their common temporary folder (a lock file: the first to ask records it, the others wait)."""
+def recorded_once(tmp_path_factory, name: str, config: dict, kept: int) -> Path:
+    """A collection recorded once per run, by whichever pytest-xdist worker asks first, in the workers' common
+    temporary folder (a lock file: the others wait for it). Tests read it; one that changes data works on a copy."""
     from filelock import FileLock
 
     from colorsort.data.collect import collect
@@ -79,9 +66,22 @@ def reference(tmp_path_factory):
     shared = tmp_path_factory.getbasetemp()
     if os.environ.get("PYTEST_XDIST_WORKER"):
         shared = shared.parent  # pytest-of-<user>/pytest-<n>/, the workers' folders inside
-    root = shared / "scale-reference"
+    root = shared / name
     with FileLock(str(root) + ".lock"):
-        if not (root / "meta" / "info.json").is_file():
-            summary = collect(CollectConfig(out=str(root), **{**SCALE, "shard_size": 32}), **QUIET)
-            assert summary.kept == 4 and summary.shards == 1
+        if not (root / "meta" / "info.json").is_file():  # a collection publishes its folder only when complete
+            summary = collect(CollectConfig(out=str(root), **config), **QUIET)
+            assert summary.kept == kept and not summary.errors, summary
     return root
+
+
+@pytest.fixture(scope="session")
+def tiny_dataset(tmp_path_factory) -> Path:
+    """Two one-box episodes of the expert, 64x64 scene and wrist cameras."""
+    return recorded_once(tmp_path_factory, "tiny", TINY, kept=2)
+
+
+@pytest.fixture(scope="session")
+def reference(tmp_path_factory) -> Path:
+    """``scale_common.SCALE``'s collection recorded in the test's process, one shard, no engine: what the scale
+    and crash tests' collections must equal."""
+    return recorded_once(tmp_path_factory, "scale-reference", {**SCALE, "shard_size": 32}, kept=4)

@@ -3,7 +3,6 @@
 import json
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
@@ -21,11 +20,35 @@ REPO = Path(__file__).resolve().parent.parent
 
 
 @pytest.mark.parametrize("gym_id", [DEFAULT_GYM_ID] + [v.gym_id for v in VARIANTS.values()])
-def test_every_registered_id_passes_gymnasiums_env_checker(gym_id, closing):
-    env = closing(gym.make(gym_id, **SMALL))
-    check_env(env.unwrapped, skip_render_check=False)
-    obs, info = env.reset(seed=0)
-    assert set(obs) == {"pixels", "agent_pos", "environment_state"} and "is_success" in info
+def test_every_registered_id_passes_gymnasiums_env_checker_and_steps_in_lerobots_make_env(gym_id):
+    """One build of each id: LeRobot's ``make_env`` (its synchronous vector env of ``gym.make``), Gymnasium's env
+    checker on the env inside it, then LeRobot's observation preprocessing of a reset and steps to truncation."""
+    from lerobot.configs.types import FeatureType
+    from lerobot.envs.factory import make_env
+    from lerobot.envs.utils import preprocess_observation
+
+    from colorsort.benchmark.lerobot_env import ColorSortEnv
+
+    cfg = ColorSortEnv(task=gym_id.removeprefix("colorsort/"), image_size=32, episode_length=3)
+    envs = make_env(cfg, n_envs=1)["colorsort"][0]
+    try:
+        check_env(envs.envs[0].unwrapped, skip_render_check=False)
+        obs, info = envs.envs[0].reset(seed=0)
+        assert set(obs) == {"pixels", "agent_pos", "environment_state"} and "is_success" in info
+        obs, _ = envs.reset(seed=[0])
+        batch = preprocess_observation(obs)
+        for key, feature in cfg.features.items():
+            if key == "action":
+                continue
+            shape = tuple(batch[cfg.features_map[key]].shape[1:])
+            h, w, c = feature.shape if feature.type is FeatureType.VISUAL else (None, None, None)
+            assert shape == ((c, h, w) if c else feature.shape), (key, shape)  # images arrive channel-first
+        assert envs.single_action_space.shape == cfg.features["action"].shape
+        for _ in range(3):
+            obs, _, terminated, truncated, info = envs.step(np.zeros((1, *cfg.features["action"].shape), np.float32))
+        assert truncated[0] and not terminated[0]
+    finally:
+        envs.close()
 
 
 def test_list_prints_one_variant_per_line(capsys):

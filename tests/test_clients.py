@@ -30,37 +30,41 @@ def run_fresh_python(code: str, timeout: float) -> subprocess.CompletedProcess:
                           timeout=timeout)
 
 
+# every async context first, the synchronous env last: it renders in this process, after which a fork is refused
+MODES = [("async", "default"), ("async", "fork"), ("async", "forkserver"), ("async", "spawn"), ("sync", "default")]
+
 VECTOR_SCRIPT = """
-    import json, sys, numpy as np, gymnasium as gym, colorsort
-    mode, context = sys.argv[1], sys.argv[2]
-    kwargs = {} if context == "default" else {"vector_kwargs": {"context": context}}
-    envs = gym.make_vec("colorsort/ColorSort-v0", num_envs=2, vectorization_mode=mode,
-                        cameras=("scene",), image_size=(32, 32), **kwargs)
-    obs, info = envs.reset(seed=[3, 4])
-    rng = np.random.default_rng(0)
-    for _ in range(4):
-        obs, reward, terminated, truncated, info = envs.step(rng.uniform(envs.action_space.low, envs.action_space.high))
-    obs, info = envs.reset(seed=[3, 4])
-    pixels = obs["pixels"]["scene"]
-    assert pixels.shape == (2, 32, 32, 3) and pixels.std() > 5, pixels.std()  # real images, not blank
-    print("state", json.dumps(obs["agent_pos"][0].tolist()))
-    envs.close()
+    import json, numpy as np, gymnasium as gym, colorsort
+    for mode, context in MODES:
+        kwargs = {} if context == "default" else {"vector_kwargs": {"context": context}}
+        envs = gym.make_vec("colorsort/ColorSort-v0", num_envs=2, vectorization_mode=mode,
+                            cameras=("scene",), image_size=(32, 32), **kwargs)
+        obs, info = envs.reset(seed=[3, 4])
+        rng = np.random.default_rng(0)
+        for _ in range(4):
+            obs, reward, terminated, truncated, info = envs.step(
+                rng.uniform(envs.action_space.low, envs.action_space.high))
+        obs, info = envs.reset(seed=[3, 4])
+        pixels = obs["pixels"]["scene"]
+        assert pixels.shape == (2, 32, 32, 3) and pixels.std() > 5, pixels.std()  # real images, not blank
+        print("state", mode, context, json.dumps(obs["agent_pos"][0].tolist()))
+        envs.close()
 """
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("mode,context", [("sync", "default"), ("async", "default"), ("async", "fork"),
-                                          ("async", "forkserver"), ("async", "spawn")])
-def test_make_vec_steps_and_resets_in_every_mode_and_context(mode, context):
-    """Gymnasium's default async context on Linux is fork: the parent builds an env only to read its spaces."""
-    script = VECTOR_SCRIPT.replace("sys.argv[1], sys.argv[2]", f"{mode!r}, {context!r}")
-    done = run_fresh_python(script, timeout=240)
+def test_make_vec_steps_and_resets_in_every_mode_and_context():
+    """One new interpreter, as a user's script starts, runs each mode and context in turn (Gymnasium's default
+    async context on Linux is fork: the parent builds an env only to read its spaces)."""
+    done = run_fresh_python(f"MODES = {MODES!r}\n" + textwrap.dedent(VECTOR_SCRIPT), timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     reference = ColorSortGymEnv("default", **SMALL)
     first, _ = reference.reset(seed=3)
     reference.close()
-    state = [line for line in done.stdout.splitlines() if line.startswith("state")][0]
-    assert np.allclose(json.loads(state.split(" ", 1)[1]), first["agent_pos"])  # reset(seed=3) in a worker = here
+    states = [line.split(" ", 3) for line in done.stdout.splitlines() if line.startswith("state")]
+    assert [(mode, context) for _, mode, context, _ in states] == MODES
+    for *_, state in states:
+        assert np.allclose(json.loads(state), first["agent_pos"])  # reset(seed=3) in a worker = here
 
 
 def test_a_fork_after_rendering_fails_at_once_with_advice_instead_of_hanging():
