@@ -10,8 +10,10 @@ from __future__ import annotations
 import io
 import logging
 import os
+import runpy
 import subprocess
 import sys
+from collections.abc import Callable
 from contextlib import redirect_stderr, redirect_stdout
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -112,28 +114,43 @@ def exit_status(main, argv: list[str]) -> int:
         return stop.code
 
 
-def console_script(program: str, argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
-    """The console script ``program`` (ColorSort's ``colorsort-*``, LeRobot's ``lerobot-*``) with ``argv``, in
-    ``cwd``, as ``subprocess.run`` reports it (exit status, stdout, stderr): run by the entry point the script
-    calls, in this process, the same code path without a new interpreter (LeRobot's imports alone take 10 to 15 s
-    here). Its logging set-up (LeRobot's replaces the root logger's handlers), ``sys.argv`` and the working
-    directory are put back afterwards. README's own commands run as real processes."""
-    (entry,) = entry_points(group="console_scripts", name=program)
+def in_this_process(main: Callable[[], int | None], argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    """``main()`` run as a program would run with command line ``argv`` in ``cwd``, reported as ``subprocess.run``
+    reports a process (exit status, stdout, stderr), here: the same code path without a new interpreter (LeRobot's
+    imports alone take 10 to 15 s here). Its logging set-up (LeRobot's replaces the root logger's handlers),
+    ``sys.argv`` and the working directory are put back afterwards."""
     root = logging.getLogger()
     handlers, level, argv0, here = root.handlers[:], root.level, sys.argv, os.getcwd()
     out, err = io.StringIO(), io.StringIO()
-    sys.argv = [program, *argv]
+    sys.argv = list(argv)
     try:
         os.chdir(cwd)
         with redirect_stdout(out), redirect_stderr(err):
             try:
-                status = entry.load()() or 0
+                status = main() or 0
             except SystemExit as stop:
-                status = stop.code if isinstance(stop.code, int) else 1
+                status = stop.code if isinstance(stop.code, int) else (0 if stop.code is None else 1)
     finally:
         os.chdir(here)
         sys.argv = argv0
         root.handlers[:] = handlers
         root.setLevel(level)
-    return subprocess.CompletedProcess([program, *argv], status, out.getvalue(), err.getvalue())
+    return subprocess.CompletedProcess(list(argv), status, out.getvalue(), err.getvalue())
+
+
+def console_script(program: str, argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    """The console script ``program`` (ColorSort's ``colorsort-*``, LeRobot's ``lerobot-*``) with ``argv``, in
+    ``cwd``, by the entry point the script calls, in this process (``in_this_process``). README's own commands run
+    as real processes."""
+    (entry,) = entry_points(group="console_scripts", name=program)
+    return in_this_process(entry.load(), [program, *argv], cwd)
+
+
+def python_script(path: Path, argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    """``python path argv...`` in this process (``in_this_process``): the file run as ``__main__``, as python runs
+    it (``runpy.run_path``)."""
+    def main() -> None:  # a script that returns without sys.exit exits 0
+        runpy.run_path(str(path), run_name="__main__")
+
+    return in_this_process(main, [str(path), *argv], cwd)
 

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers import python_script
 
 REPO = Path(__file__).resolve().parents[1]
 DEMOS = sorted((REPO / "demos").glob("*.py"))
@@ -22,7 +23,17 @@ def documented(script: Path) -> list[str]:
     return shlex.split(line)
 
 
+def run_here(script: str, tmp_path: Path) -> subprocess.CompletedProcess:
+    """The documented command in this process (``helpers.python_script``: the file run as ``__main__`` with the
+    same argv), for the examples that import LeRobot (10 to 15 s of a new interpreter's time)."""
+    argv = documented(REPO / "demos" / script)
+    result = python_script(REPO / argv[1], argv[2:], tmp_path)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    return result
+
+
 def run(script: str, tmp_path: Path, timeout: float) -> subprocess.CompletedProcess:
+    """The documented command as a process of its own."""
     argv = documented(REPO / "demos" / script)
     env = {**os.environ, "HF_HUB_OFFLINE": "1", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
     result = subprocess.run([sys.executable, str(REPO / argv[1]), *argv[2:]], cwd=tmp_path, env=env,
@@ -52,7 +63,7 @@ def test_the_vector_env_example_steps_async_cells(tmp_path):
 
 @pytest.mark.slow
 def test_the_collect_demos_script_records_a_loadable_dataset(tmp_path):
-    run("collect_demos.py", tmp_path, timeout=300)
+    run_here("collect_demos.py", tmp_path)
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     dataset = LeRobotDataset("local/colorsort", root=tmp_path / "datasets" / "example", video_backend="pyav")
@@ -62,7 +73,7 @@ def test_the_collect_demos_script_records_a_loadable_dataset(tmp_path):
 
 @pytest.mark.slow
 def test_collect_train_evaluate_from_python_scores_a_trained_policy(tmp_path):
-    out = run("collect_train_evaluate.py", tmp_path, timeout=600).stdout
+    out = run_here("collect_train_evaluate.py", tmp_path).stdout
     assert "collected 1 episodes" in out and "trained 2 updates" in out
     assert "episodes                 1" in out and "seeds                    10000..10000" in out
     assert (tmp_path / "outputs" / "example" / "train" / "checkpoints" / "last" / "pretrained_model"

@@ -136,20 +136,21 @@ def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env):
-    """tracking-fast (0.3 m/s, a box every 2 s): 20 boxes, every one in the bin of its colour, none let go,
-    the belt never stopping, at 28 or more a minute (benchmarks/bench_tracking.py runs 10 seeds of 20)."""
+    """tracking-fast (0.3 m/s, a box every 2 s): 12 boxes, every one in the bin of its colour, none let go,
+    the belt never stopping, after the first one placed at the belt's rate (a box every 2.1 s or less; falling
+    behind it would drop boxes); benchmarks/bench_tracking.py runs 10 seeds of 20."""
     env = make_env(preset="tracking-fast", has_offscreen_renderer=True, ignore_done=True, seed=7)
     obs = env.reset()
     expert = make_expert(env)
     expert.reset(obs)
-    belt_stopped = 0
-    while len(env.events) < 20 and env.cur_time < 80.0:
+    belt_stopped, boxes = 0, 12
+    while len(env.events) < boxes and env.cur_time < 60.0:
         obs, _, _, info = env.step(expert.act(obs))
         belt_stopped += not info["belt_running"]
-    assert [str(e.outcome) for e in env.events[:20]] == ["placed"] * 20, env.events
-    assert all(e.bin == e.color for e in env.events[:20])
+    assert [str(e.outcome) for e in env.events[:boxes]] == ["placed"] * boxes, env.events
+    assert all(e.bin == e.color for e in env.events[:boxes])
     assert belt_stopped == 0 and expert.let_go == 0
-    assert 60.0 * 20 / env.events[19].time >= 28.0
+    assert (env.events[boxes - 1].time - env.events[0].time) / (boxes - 1) <= 2.1
 
 
 def test_the_legs_follow_on_without_a_pause_and_the_carry_leaves_halfway_up_clear_of_the_rails(make_env):
@@ -271,7 +272,7 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
 
     expert.reset(obs)
     active, waited, references, phases = 0, 0.0, [], []
-    while len(env.events) < 10:
+    while len(env.events) < 6:
         active += expert.phase.value in ("intercept box", "track box", "move over bin", "release")
         before = expert.phase.value
         action = expert.act(obs)
@@ -280,7 +281,7 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
         references.append(expert.motion.sample(expert.time)[0])
         phases.append(expert.phase.value)
         obs, *_ = env.step(action)
-    assert (active * env.control_timestep - waited) / 10 >= fastest
+    assert (active * env.control_timestep - waited) / 6 >= fastest
     peaks = commanded_peaks(np.array(references), phases, env.control_timestep)
     for phase, (acceleration, jerk) in peaks.items():  # every phase, the dense track's too, within the limits
         assert np.all(acceleration <= expert.limits.acceleration * 1.01), phase
