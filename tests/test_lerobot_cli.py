@@ -173,8 +173,6 @@ def test_a_lerobot_policy_runs_an_episode_through_lerobots_env_config(tiny_datas
     assert report.episodes == 1 and report.success_rate == 0.0 and report.per_episode[0]["steps"] == 10
 
 
-
-
 def test_documented_command_makes_a_state_only_copy_of_a_dataset_with_cameras(tiny_dataset, tmp_path):
     """The docs' lerobot-edit-dataset command, verbatim: the camera features go, states and actions stay."""
     import shutil
