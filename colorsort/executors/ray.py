@@ -2,17 +2,20 @@
 the cluster this node belongs to, as on a SLURM allocation that ran ``ray start``).
 
 Each task takes 1 CPU; Ray runs a task again when its worker process or node dies (``max_retries``),
-never on an exception of the task itself. Tasks report through one ``ray.util.queue.Queue``; a
-"start" message per attempt is how retries are counted. Ctrl-C cancels the tasks: a running one
-gets KeyboardInterrupt and returns what it finished; one that has not returned ``cancel_wait_s`` after its
-cancel is killed (``force``) and reported stopped, never ok. Workers must have colorsort installed, at the
-same version, and see the same file system for the paths they are given.
+never on an exception of the task itself. Tasks report through a ``ray.util.queue.Queue``, each message
+tagged with its run (the queue is an actor, a worker process of its own: one per driver and cluster,
+kept for the driver's later runs); a "start" message per attempt is how retries are counted. Ctrl-C
+cancels the tasks: a running one gets KeyboardInterrupt and returns what it finished; one that has not
+returned ``cancel_wait_s`` after its cancel is killed (``force``) and reported stopped, never ok.
+Workers must have colorsort installed, at the same version, and see the same file system for the paths
+they are given.
 """
 
 from __future__ import annotations
 
 import logging
 import time
+import uuid
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,21 +27,45 @@ from colorsort.executors.base import ExecutorConfig, Task, TaskResult
 @dataclass
 class _Context:
     queue: Any
+    run: str
     key: str
 
     def send(self, message: Any) -> None:
-        self.queue.put(("message", self.key, message))
+        self.queue.put((self.run, "message", self.key, message))
 
     def stopping(self) -> bool:
         return False  # Ray cancels a task by raising KeyboardInterrupt in it
 
 
-def _entry(task: Task, queue) -> Any:
+def _entry(task: Task, queue, run: str) -> Any:
     from colorsort.logs import quiet_robosuite_info
 
     quiet_robosuite_info()
-    queue.put(("start", task.key, None))
-    return task.fn(task.arg, _Context(queue, task.key))
+    queue.put((run, "start", task.key, None))
+    return task.fn(task.arg, _Context(queue, run, task.key))
+
+
+_QUEUES: dict[tuple[str, str], Any] = {}  # (this driver's node, new with each cluster; its job) -> its message queue
+
+
+def _message_queue() -> Any:
+    """This driver's message queue on the cluster it is connected to, made on first use; a queue whose actor is
+    gone (its cluster shut down) is made again."""
+    import ray
+    from ray.util.queue import Queue
+
+    context = ray.get_runtime_context()
+    key = (context.get_node_id(), context.get_job_id())
+    queue = _QUEUES.get(key)
+    if queue is not None:
+        try:
+            queue.qsize()
+        except ray.exceptions.RayError:
+            queue = None
+    if queue is None:
+        _QUEUES.clear()
+        queue = _QUEUES[key] = Queue()
+    return queue
 
 
 class RayExecutor:
@@ -57,14 +84,13 @@ class RayExecutor:
     def run(self, tasks: list[Task], on_message: Callable[[Any], None] = lambda m: None,
             on_done: Callable[[TaskResult], None] = lambda r: None) -> list[TaskResult]:
         import ray
-        from ray.util.queue import Queue
 
         started_here = not ray.is_initialized()
         if started_here:
             # "local": a new cluster here, never one that an earlier `ray start` on this machine left behind
             ray.init(address=self.config.address or "local", runtime_env={"env_vars": self.env},
                      include_dashboard=False, logging_level=logging.WARNING)
-        queue = Queue()
+        queue, run = _message_queue(), uuid.uuid4().hex
         remote = ray.remote(_entry).options(num_cpus=1, max_retries=self.config.retries, retry_exceptions=False)
         results = [TaskResult(t.key) for t in tasks]
         index = {t.key: i for i, t in enumerate(tasks)}
@@ -72,7 +98,9 @@ class RayExecutor:
         running: dict = {}
 
         def drain() -> None:
-            for kind, key, payload in queue.get_nowait_batch(queue.qsize()):
+            for sender, kind, key, payload in queue.get_nowait_batch(queue.qsize()):
+                if sender != run:  # a task of an earlier run, stopped since
+                    continue
                 if kind == "start":
                     results[index[key]].attempts += 1
                 else:
@@ -92,7 +120,7 @@ class RayExecutor:
             while pending or running:
                 while pending and len(running) < self.config.workers:
                     i = pending.popleft()
-                    running[remote.remote(tasks[i], queue)] = i
+                    running[remote.remote(tasks[i], queue, run)] = i
                 done, _ = ray.wait(list(running), num_returns=len(running), timeout=0.5)
                 drain()
                 for ref in done:
@@ -115,7 +143,8 @@ class RayExecutor:
                 on_done(results[i])
         finally:
             drain()
-            queue.shutdown()
             if started_here:
+                queue.shutdown()
+                _QUEUES.clear()
                 ray.shutdown()
         return results
