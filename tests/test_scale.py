@@ -109,6 +109,27 @@ def test_a_task_its_cancel_does_not_stop_is_reported_stopped_never_ok(cluster):
     assert time.monotonic() - started < 60
 
 
+def test_runs_of_one_driver_share_itsmessage_queue_and_read_only_their_own_messages(cluster):
+    """The queue is an actor (a worker process): made once per driver and cluster. A message an earlier run's task
+    sent after its run ended (a cancelled one, say) is not counted by the next run."""
+    from colorsort.executors.base import Task
+    from colorsort.executors.ray import RayExecutor, message_queue
+
+    def echo(arg, ctx):
+        ctx.send(arg)
+        return arg
+
+    executor = RayExecutor(ExecutorConfig("ray", workers=1), {})
+    heard = []
+    [first] = executor.run([Task("t", echo, 1)], on_message=heard.append)
+    queue = message_queue()
+    queue.put(("an-earlier-run", "start", "t", None))  # as a stopped task of another run might still send
+    queue.put(("an-earlier-run", "message", "t", "stale"))
+    [second] = executor.run([Task("t", echo, 2)], on_message=heard.append)
+    assert (first.value, first.attempts, second.value, second.attempts) == (1, 1, 2, 1)
+    assert heard == [1, 2] and message_queue() is queue
+
+
 def test_an_evaluation_on_ray_gives_the_local_numbers_and_films_each_episode_where_it_runs(cluster, tmp_path):
     """Every episode's report (outcomes, boxes, cycle times) as on this process; its film made in the Ray worker.
     Whole episodes on Ray, the expert sorting all: the SLURM test's docs command."""

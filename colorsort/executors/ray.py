@@ -48,7 +48,7 @@ def _entry(task: Task, queue, run: str) -> Any:
 _QUEUES: dict[tuple[str, str], Any] = {}  # (this driver's node, new with each cluster; its job) -> its message queue
 
 
-def _message_queue() -> Any:
+def message_queue() -> Any:
     """This driver's message queue on the cluster it is connected to, made on first use; a queue whose actor is
     gone (its cluster shut down) is made again."""
     import ray
@@ -90,7 +90,7 @@ class RayExecutor:
             # "local": a new cluster here, never one that an earlier `ray start` on this machine left behind
             ray.init(address=self.config.address or "local", runtime_env={"env_vars": self.env},
                      include_dashboard=False, logging_level=logging.WARNING)
-        queue, run = _message_queue(), uuid.uuid4().hex
+        queue, run = message_queue(), uuid.uuid4().hex
         remote = ray.remote(_entry).options(num_cpus=1, max_retries=self.config.retries, retry_exceptions=False)
         results = [TaskResult(t.key) for t in tasks]
         index = {t.key: i for i, t in enumerate(tasks)}
