@@ -13,13 +13,13 @@ from scale_common import QUIET, SCALE  # noqa: E402
 
 import colorsort  # noqa: E402,F401  (registers the task)
 
-# The modules that take longest (each one's summed test time in a full `make test`, from pytest's --junitxml), run
-# first: each stays on one worker (--dist loadfile), and a long one started last kept the other worker idle for
-# minutes at the end. The Makefile's --no-loadscope-reorder keeps this order (xdist's own puts the modules with the
-# most tests first).
-LONGEST_FIRST = ("test_scale", "test_batched", "test_lerobot_cli", "test_benchmark", "test_collect", "test_clients",
-                 "test_crashes", "test_tracking", "test_pipeline", "test_demos", "test_expert", "test_takeover",
-                 "test_report", "test_shipped")
+# The modules that take longest (each one's summed test time in a full `make test`, from pytest's --junitxml; on a
+# fresh machine test_batched also compiles MuJoCo Warp's kernels, minutes more), run first: each stays on one worker
+# (--dist loadfile), and a long one started last kept the other worker idle for minutes at the end. The Makefile's
+# --no-loadscope-reorder keeps this order (xdist's own puts the modules with the most tests first).
+LONGEST_FIRST = ("test_batched", "test_scale", "test_collect", "test_lerobot_cli", "test_benchmark", "test_pipeline",
+                 "test_crashes", "test_takeover", "test_expert", "test_tracking", "test_clients", "test_shipped",
+                 "test_demos", "test_report")
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

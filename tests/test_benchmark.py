@@ -19,7 +19,8 @@ SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
 REPO = Path(__file__).resolve().parent.parent
 
 
-@pytest.mark.parametrize("gym_id", [DEFAULT_GYM_ID] + [v.gym_id for v in VARIANTS.values()])
+@pytest.mark.parametrize("gym_id", [DEFAULT_GYM_ID] + [pytest.param(v.gym_id, marks=pytest.mark.slow)
+                                                         for v in VARIANTS.values()])  # test-fast: the default id
 def test_every_registered_id_passes_gymnasiums_env_checker_and_steps_in_lerobots_make_env(gym_id):
     """One build of each id: LeRobot's ``make_env`` (its synchronous vector env of ``gym.make``), Gymnasium's env
     checker on the env inside it, then LeRobot's observation preprocessing of a reset and steps to truncation."""
