@@ -82,6 +82,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
 	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
 	$(VENV)/bin/python benchmarks/bench_ci.py
+	$(VENV)/bin/python benchmarks/bench_ci.py --only compile
 	$(VENV)/bin/python benchmarks/bench_render_parity.py
 	$(VENV)/bin/python benchmarks/bench_render_parity.py --variant lighting
 	$(VENV)/bin/python benchmarks/bench_warp_agreement.py --policy baselines/act-state --episodes 50 --episode-length 600
