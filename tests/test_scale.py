@@ -109,7 +109,7 @@ def test_a_task_its_cancel_does_not_stop_is_reported_stopped_never_ok(cluster):
     assert time.monotonic() - started < 60
 
 
-def test_runs_of_one_driver_share_itsmessage_queue_and_read_only_their_own_messages(cluster):
+def test_runs_of_one_driver_share_its_message_queue_and_read_only_their_own_messages(cluster):
     """The queue is an actor (a worker process): made once per driver and cluster. A message an earlier run's task
     sent after its run ended (a cancelled one, say) is not counted by the next run."""
     from colorsort.executors.base import Task

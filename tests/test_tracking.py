@@ -271,8 +271,8 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
     fastest = min(shortest_cycle(expert, c, "jerk").total for c in BIN_COLORS)
 
     expert.reset(obs)
-    active, waited, references, phases = 0, 0.0, [], []
-    while len(env.events) < 6:
+    active, waited, references, phases, boxes = 0, 0.0, [], [], 6
+    while len(env.events) < boxes:
         active += expert.phase.value in ("intercept box", "track box", "move over bin", "release")
         before = expert.phase.value
         action = expert.act(obs)
@@ -281,7 +281,7 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
         references.append(expert.motion.sample(expert.time)[0])
         phases.append(expert.phase.value)
         obs, *_ = env.step(action)
-    assert (active * env.control_timestep - waited) / 6 >= fastest
+    assert (active * env.control_timestep - waited) / boxes >= fastest
     peaks = commanded_peaks(np.array(references), phases, env.control_timestep)
     for phase, (acceleration, jerk) in peaks.items():  # every phase, the dense track's too, within the limits
         assert np.all(acceleration <= expert.limits.acceleration * 1.01), phase

@@ -45,27 +45,26 @@ def _entry(task: Task, queue, run: str) -> Any:
     return task.fn(task.arg, _Context(queue, run, task.key))
 
 
-_QUEUES: dict[tuple[str, str], Any] = {}  # (this driver's node, new with each cluster; its job) -> its message queue
+_queue: tuple[tuple[str, str], Any] | None = None  # ((this driver's node, new with each cluster; its job), queue)
 
 
 def message_queue() -> Any:
     """This driver's message queue on the cluster it is connected to, made on first use; a queue whose actor is
-    gone (its cluster shut down) is made again."""
+    gone is made again."""
+    global _queue
     import ray
     from ray.util.queue import Queue
 
     context = ray.get_runtime_context()
     key = (context.get_node_id(), context.get_job_id())
-    queue = _QUEUES.get(key)
-    if queue is not None:
+    if _queue is not None and _queue[0] == key:
         try:
-            queue.qsize()
+            _queue[1].qsize()
+            return _queue[1]
         except ray.exceptions.RayError:
-            queue = None
-    if queue is None:
-        _QUEUES.clear()
-        queue = _QUEUES[key] = Queue()
-    return queue
+            pass
+    _queue = (key, Queue())
+    return _queue[1]
 
 
 class RayExecutor:
@@ -145,6 +144,5 @@ class RayExecutor:
             drain()
             if started_here:
                 queue.shutdown()
-                _QUEUES.clear()
                 ray.shutdown()
         return results
