@@ -16,6 +16,9 @@ from colorsort.config import BIN_COLORS, COLORS, Lighting
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
+# what an evaluation renders when a test reads only its outcomes: the expert the camera it reads, random nothing
+EXPERT_ONLY = dict(image_size=(32, 32), cameras=("sensor",))
+NO_CAMERAS = dict(cameras=())
 REPO = Path(__file__).resolve().parent.parent
 
 
@@ -68,13 +71,13 @@ def test_unknown_variant_names_the_valid_ones(capsys):
 @pytest.fixture(scope="module")
 def expert_on_default():
     """The expert's first two episodes of `default` (seeds 10000, 10001): several tests read them."""
-    return evaluate("expert", "default", episodes=2, progress=False, **SMALL)
+    return evaluate("expert", "default", episodes=2, progress=False, **EXPERT_ONLY)
 
 
 @pytest.fixture(scope="module")
 def random_from_seven():
     """Random actions, episodes from seed 7, in one env: the reference the repeat and env-count tests compare with."""
-    return evaluate("random", "default", episodes=3, seed=7, progress=False, envs=1, **SMALL)
+    return evaluate("random", "default", episodes=3, seed=7, progress=False, envs=1, **NO_CAMERAS)
 
 
 def test_expert_sorts_every_box_on_default(expert_on_default):
@@ -87,7 +90,7 @@ def test_expert_sorts_every_box_on_default(expert_on_default):
 @pytest.mark.slow
 def test_random_policy_fails_and_seeded_runs_repeat_exactly(random_from_seven):
     first = random_from_seven
-    again = evaluate("random", "default", episodes=3, seed=7, progress=False, **SMALL)
+    again = evaluate("random", "default", episodes=3, seed=7, progress=False, **NO_CAMERAS)
     assert first.success_rate == 0.0
     assert first.per_episode == again.per_episode and first.seeds == [7, 8, 9]
 
@@ -95,10 +98,10 @@ def test_random_policy_fails_and_seeded_runs_repeat_exactly(random_from_seven):
 @pytest.mark.slow
 def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(random_from_seven, capsys):
     one = random_from_seven
-    two = evaluate("random", "default", episodes=3, seed=7, progress=False, envs=2, **SMALL)
+    two = evaluate("random", "default", episodes=3, seed=7, progress=False, envs=2, **NO_CAMERAS)
     assert one.per_episode == two.per_episode and one.sim_time_s == two.sim_time_s
-    assert eval_main(["--policy", "random", "--episodes", "2", "--seed", "7", "--envs", "2", "--image-size", "32",
-                      "--cameras", "scene"]) == 0
+    assert eval_main(["--policy", "random", "--episodes", "2", "--seed", "7", "--envs", "2",
+                      "--cameras", "none"]) == 0
     assert "success rate" in capsys.readouterr().out
     assert exit_status(eval_main, ["--episodes", "1", "--envs", "0"]) == 2
     assert "--envs 0: give at least 1" in capsys.readouterr().err
@@ -107,7 +110,7 @@ def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(random
 @pytest.mark.slow
 def test_each_box_of_an_episode_says_where_it_was_set_down(expert_on_default):
     """On `jitter` the boxes lie off the centre line and turned, within the variant's ranges; on `default` on it."""
-    jitter = evaluate("expert", "jitter", episodes=1, progress=False, **SMALL)
+    jitter = evaluate("expert", "jitter", episodes=1, progress=False, **EXPERT_ONLY)
     plain = expert_on_default
     boxes = jitter.per_episode[0]["boxes"]
     config = VARIANTS["jitter"].task_config
@@ -124,7 +127,7 @@ def test_each_box_of_an_episode_says_where_it_was_set_down(expert_on_default):
 @pytest.mark.slow
 def test_distractors_are_let_through_and_counted():
     """One episode (seed 10000: 2 of its 4 boxes have no bin)."""
-    report = evaluate("expert", "distractors", episodes=1, progress=False, **SMALL)
+    report = evaluate("expert", "distractors", episodes=1, progress=False, **EXPERT_ONLY)
     assert report.success_rate == 1.0
     assert report.distractors > 0 and report.distractors_let_through == report.distractors
     assert report.correct + report.distractors_let_through == VARIANTS["distractors"].boxes
