@@ -16,8 +16,8 @@ from colorsort.config import BIN_COLORS, COLORS, Lighting
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
-# what an evaluation renders when a test reads only its outcomes: the expert the camera it reads, random nothing
-EXPERT_ONLY = dict(image_size=(32, 32), cameras=("sensor",))
+# what an evaluation renders when a test reads only its outcomes: the expert reads the sensor camera, random nothing
+SENSOR_ONLY = dict(image_size=(32, 32), cameras=("sensor",))
 NO_CAMERAS = dict(cameras=())
 REPO = Path(__file__).resolve().parent.parent
 
@@ -71,7 +71,7 @@ def test_unknown_variant_names_the_valid_ones(capsys):
 @pytest.fixture(scope="module")
 def expert_on_default():
     """The expert's first two episodes of `default` (seeds 10000, 10001): several tests read them."""
-    return evaluate("expert", "default", episodes=2, progress=False, **EXPERT_ONLY)
+    return evaluate("expert", "default", episodes=2, progress=False, **SENSOR_ONLY)
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +110,7 @@ def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(random
 @pytest.mark.slow
 def test_each_box_of_an_episode_says_where_it_was_set_down(expert_on_default):
     """On `jitter` the boxes lie off the centre line and turned, within the variant's ranges; on `default` on it."""
-    jitter = evaluate("expert", "jitter", episodes=1, progress=False, **EXPERT_ONLY)
+    jitter = evaluate("expert", "jitter", episodes=1, progress=False, **SENSOR_ONLY)
     plain = expert_on_default
     boxes = jitter.per_episode[0]["boxes"]
     config = VARIANTS["jitter"].task_config
@@ -127,7 +127,7 @@ def test_each_box_of_an_episode_says_where_it_was_set_down(expert_on_default):
 @pytest.mark.slow
 def test_distractors_are_let_through_and_counted():
     """One episode (seed 10000: 2 of its 4 boxes have no bin)."""
-    report = evaluate("expert", "distractors", episodes=1, progress=False, **EXPERT_ONLY)
+    report = evaluate("expert", "distractors", episodes=1, progress=False, **SENSOR_ONLY)
     assert report.success_rate == 1.0
     assert report.distractors > 0 and report.distractors_let_through == report.distractors
     assert report.correct + report.distractors_let_through == VARIANTS["distractors"].boxes
