@@ -21,7 +21,7 @@ INSTALL_REQUIRES = [
     "tqdm>=4.66",
     "av>=15,<16",
     # --executor ray: collection and evaluation on a Ray cluster (a local one, or one that spans a SLURM job)
-    "ray>=2.50,<3",
+    "ray>=2.52,<3",  # 2.52: token authentication (`ray get-auth-token`)
     # colorsort-baseline plots success against the number of demos and training time:
     "matplotlib>=3.8",
     # robosuite's real run-time needs, for `pip install --no-deps robosuite`:

@@ -48,7 +48,8 @@ def documented_ray_command(program: str) -> list[str]:
 def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_docs_eval_command(tmp_path):
     """The batch script on a one-node stand-in for SLURM (srun runs its command here, scontrol names this host),
     its command the docs' colorsort-eval on Ray, verbatim: a Ray head starts and the expert's episodes run there.
-    First in the module: its head is the only Ray cluster on the machine (the module's starts after it)."""
+    First in the module: its head is the only Ray cluster on the machine (the module's starts after it). The job's
+    home is new, as on a machine where Ray never ran: the script makes the token its cluster authenticates with."""
     shims = tmp_path / "bin"
     shims.mkdir()
     (shims / "srun").write_text('#!/bin/bash\n'
@@ -61,9 +62,12 @@ def test_the_generated_slurm_script_runs_a_ray_cluster_and_the_docs_eval_command
     subprocess.run([str(Path(sys.executable).parent / "colorsort-slurm"), "--nodes", "1", "--cpus-per-node", "2",
                     "--port", "6391", "--out", str(script), "--", *documented_ray_command("colorsort-eval")],
                    check=True, capture_output=True)
-    env = {**os.environ, "PATH": f"{shims}:{os.environ['PATH']}", "SLURM_JOB_NODELIST": "node1"}
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {**os.environ, "PATH": f"{shims}:{os.environ['PATH']}", "SLURM_JOB_NODELIST": "node1", "HOME": str(home)}
     job = subprocess.run(["bash", str(script)], env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert job.returncode == 0, job.stdout[-3000:] + job.stderr[-3000:]
+    assert (home / ".ray" / "auth_token").stat().st_size > 0
     assert "--address" in script.read_text() and "ray start --head" in script.read_text()
     assert re.search(r"episodes\s+2\b", job.stdout) and re.search(r"success rate\s+100\.0%", job.stdout), job.stdout
 

@@ -69,7 +69,8 @@ def job_script(job: SlurmJob, command: list[str]) -> str:
 set -euo pipefail
 source {shlex.quote(str(Path(job.venv) / "bin" / "activate"))}
 export MUJOCO_GL="${{MUJOCO_GL:-egl}}" HF_HUB_OFFLINE=1
-export RAY_AUTH_MODE=token  # every Ray process of the job uses the token in ~/.ray/auth_token (made if missing)
+export RAY_AUTH_MODE=token  # every Ray process of the job uses the token in ~/.ray/auth_token (a shared home)
+ray get-auth-token --generate >/dev/null  # `ray start` never makes one: it stops if none is there
 
 nodes=($(scontrol show hostnames "$SLURM_JOB_NODELIST"))
 head_ip=$(srun --nodes=1 --ntasks=1 -w "${{nodes[0]}}" hostname --ip-address | awk '{{print $1}}')
