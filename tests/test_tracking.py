@@ -6,6 +6,7 @@ import pytest
 from colorsort.expert.base import Cycle
 from colorsort.expert.factory import make_expert
 from colorsort.expert.tracking import Sighting, TrackingExpert
+from colorsort.variants import get_variant
 
 
 def tracking_env(make_env, robot: str = "IRB140", **overrides):
@@ -135,6 +136,22 @@ def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
 
 
 @pytest.mark.slow
+def test_the_expert_takes_its_own_photo_whatever_size_the_recorded_sensor_camera_is(make_env):
+    """A dataset's `sensor` camera at 32 px: the expert still locates each box on its own 128 px photo and places
+    every box of a jittered tracking episode (on the 32 px image it dropped them all: seed 1000000, the first
+    seed of a recipe's tracking-jitter demos)."""
+    env = make_env(config=get_variant("tracking-jitter").task_config, has_offscreen_renderer=True, use_camera_obs=True,
+                   camera_names=["sensor"], camera_heights=32, camera_widths=32)
+    obs = env.reset(seed=1_000_000)
+    assert obs["sensor_image"].shape[:2] == (32, 32)
+    expert = make_expert(env)
+    expert.reset(obs)
+    while len(env.events) < 3 and env.cur_time < 20.0:
+        obs, *_ = env.step(expert.act(obs))
+    assert [str(e.outcome) for e in env.events[:3]] == ["placed"] * 3, env.events
+    assert all(e.bin == e.color for e in env.events[:3]) and expert.let_go == 0
+
+
 def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env):
     """tracking-fast (0.3 m/s, a box every 2 s): 12 boxes, every one in the bin of its colour, none let go,
     the belt never stopping, after the first one placed at the belt's rate (a box every 2.1 s or less; falling

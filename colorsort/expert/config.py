@@ -28,8 +28,8 @@ class ExpertConfig:
         drop_tolerance: [rad] the same over a bin.
         grip_timeout: [s] time to wait for a seal before backing off and looking again.
         release_time: [s] time after the seal is gone before moving on (the box falls clear).
-        sensor_image_size: [px] side of the triggered photo, when the env's observations do not
-            include ``sensor_image``.
+        sensor_image_size: [px] side of the photo the expert takes when the ray fires (its own, whatever
+            cameras the env renders).
         track_descend_time: [s] on a tracking belt, from over the moving box down onto it.
         track_hold_time: [s] then on it, while the seal forms.
         track_lift_time: [s] then up until the box's bottom is ``track_lift_gap`` over the belt, still moving
