@@ -16,7 +16,8 @@ from colorsort.config import BIN_COLORS, COLORS, Lighting
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
-# what an evaluation renders when a test reads only its outcomes: the expert reads the sensor camera, random nothing
+# what an evaluation renders when a test reads only its outcomes: for the expert one camera (the off-screen renderer
+# its own photo needs), for the random policy none
 SENSOR_ONLY = dict(image_size=(32, 32), cameras=("sensor",))
 NO_CAMERAS = dict(cameras=())
 REPO = Path(__file__).resolve().parent.parent

@@ -135,7 +135,6 @@ def test_colorsort_sort_reports_how_long_the_belt_stood_still(tmp_path, capsys):
     assert "belt stood still 0.0 s" in capsys.readouterr().out
 
 
-@pytest.mark.slow
 def test_the_expert_takes_its_own_photo_whatever_size_the_recorded_sensor_camera_is(make_env):
     """A dataset's `sensor` camera at 32 px: the expert still locates each box on its own 128 px photo and places
     every box of a jittered tracking episode (on the 32 px image it dropped them all: seed 1000000, the first
@@ -152,6 +151,7 @@ def test_the_expert_takes_its_own_photo_whatever_size_the_recorded_sensor_camera
     assert all(e.bin == e.color for e in env.events[:3]) and expert.let_go == 0
 
 
+@pytest.mark.slow
 def test_the_fast_tracking_belt_is_solved_every_box_placed_none_dropped(make_env):
     """tracking-fast (0.3 m/s, a box every 2 s): 12 boxes, every one in the bin of its colour, none let go,
     the belt never stopping, after the first one placed at the belt's rate (a box every 2.1 s or less; falling

@@ -65,10 +65,9 @@ class Calibration:
                    None if spec.joint_accelerations is None else np.array(spec.joint_accelerations))
 
 
-def sensor_source(env: ColorSort, size: int) -> tuple[tuple[int, int], Callable[[dict], np.ndarray]]:
-    """Where the expert's colour images come from: a ``size`` x ``size`` px photo of the sensor camera that the
-    expert triggers when the ray fires, whatever cameras the env renders for a policy or a dataset (a recorded
-    ``sensor`` camera of 64 px or less located a box on the jittered tracking belt too coarsely: the expert's
-    grips slipped and it dropped boxes in 14 of 24 demos at 64 px). Returns the photo's (width, height) [px] and
-    a function of the observation that takes it."""
-    return (size, size), lambda obs: env.camera_image("sensor", size, size)
+def sensor_source(env: ColorSort, size: int) -> Callable[[dict], np.ndarray]:
+    """The expert's colour images: a function of the observation that takes a ``size`` x ``size`` px photo of the
+    sensor camera (the expert calls it when the ray fires), whatever cameras the env renders for a policy or a
+    dataset (a recorded ``sensor`` camera of 64 px or less located a box on the jittered tracking belt too
+    coarsely: the expert's grips slipped and it dropped boxes in 14 of 24 demos at 64 px)."""
+    return lambda obs: env.camera_image("sensor", size, size)

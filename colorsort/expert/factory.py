@@ -32,6 +32,6 @@ def make_expert(env: ColorSort, config: ExpertConfig | None = None) -> Expert:
         raise ConfigError("The expert needs the sensor camera: make the env with has_offscreen_renderer=True")
     tracking = env.config.tracking
     config = config or expert_preset(tracking)
-    size, image = sensor_source(env, config.sensor_image_size)
+    size = config.sensor_image_size
     cls = TrackingExpert if tracking else SortingExpert
-    return cls(Calibration.from_env(env, size), image, config)
+    return cls(Calibration.from_env(env, (size, size)), sensor_source(env, size), config)
