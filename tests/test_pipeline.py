@@ -179,15 +179,16 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
 
 @pytest.mark.slow
 def test_a_dagger_round_adds_the_experts_labels_of_the_policys_states_and_trains_again(tmp_path, in_process, capsys):
-    """--dagger.rounds=1, tiny: the first policy plays a `default` episode, the expert takes over after 5 steps and
-    labels the states from there (their own task text), the labels join the demo, a second policy is trained on
-    both from scratch and is the one scored; the same command again reuses every stage."""
+    """--dagger.rounds=1, tiny, from the cameras: the first policy plays a `default` episode, the expert takes over
+    after 5 steps and labels the states from there (their own task text, the demos' cameras and video codec), the
+    labels join the demo, a second policy is trained on both from scratch and is the one scored; the same command
+    again reuses every stage."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     from colorsort.training.takeover import PROVENANCE, TAKEOVER_SEED, TAKEOVER_TASK
 
     out = tmp_path / "dagger"
-    argv = ["--recipe", "state", "--demos.counts=1", "--demos.train_mix=default:1", "--demos.boxes_per_episode=1",
+    argv = ["--recipe", "camera", "--demos.counts=1", "--demos.train_mix=default:1", "--demos.boxes_per_episode=1",
             "--training.steps=2", "--training.seeds=1000", "--training.batch_size=2", "--training.num_workers=0",
             "--dagger.rounds=1", "--dagger.episodes=1", "--dagger.handover=5:5", "--evaluation.variants=default",
             "--evaluation.episodes=1", "--evaluation.curve_episodes=1", "--evaluation.episode_length=5",
@@ -206,11 +207,15 @@ def test_a_dagger_round_adds_the_experts_labels_of_the_policys_states_and_trains
     assert root[merged].num_episodes == root[demos].num_episodes + 1
     assert root[merged].num_frames == root[demos].num_frames + root[labels].num_frames
     assert TAKEOVER_TASK in set(root[merged].meta.tasks.index) and len(root[merged].meta.tasks) == 2
+    videos = {key: root[demos].meta.features[key] for key in root[demos].meta.video_keys}
+    assert videos and {key: root[labels].meta.features[key] for key in videos} == videos  # codec included
+    assert "observation.environment_state" not in root[merged].meta.features  # the camera recipe's inputs
+    assert root[merged][len(root[merged]) - 1]["observation.images.sensor"].shape == (3, 32, 32)
     results = json.loads((out / "results.json").read_text())
     (row,) = results["rows"]
     assert row["frames"] == root[merged].num_frames and results["recipe"]["dagger"]["rounds"] == 1
     assert list((out / "eval").glob(f"{second[0].name}-*-default-*.json"))  # the second policy is scored
-    assert "| default | ACT + DAgger (1 round), state | 1 |" in printed
+    assert f"| default | {get_recipe('camera', {'dagger.rounds': 1}).label} | 1 |" in printed
 
     status, again = baseline_main(argv, capsys)
     assert status == 0, again[-3000:]

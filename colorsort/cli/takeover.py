@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 
 from colorsort.cli.run import guarded
+from colorsort.data.config import VCODECS
 from colorsort.errors import FAILED, ConfigError
 from colorsort.logs import quiet_robosuite_info
 from colorsort.training.takeover import TAKEOVER_SEED, TakeoverConfig, record_takeovers
@@ -50,9 +51,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--handover", default="20,200", help="FIRST,LAST: the policy's steps before the expert's")
     parser.add_argument("--seed", type=int, default=TAKEOVER_SEED, help="env seed of the first episode")
     parser.add_argument("--repo-id", default="local/colorsort-takeover", help="the dataset's LeRobot repo id")
+    parser.add_argument("--vcodec", default=TakeoverConfig.vcodec,
+                        help=f"video codec, one of {VCODECS}: the demos' (colorsort-collect --vcodec)")
     args = parser.parse_args(argv)
     config = TakeoverConfig(policy=args.policy, out=args.out, variant=args.variant, episodes=args.episodes,
-                            handover=parse_handover(args.handover), seed=args.seed, repo_id=args.repo_id)
+                            handover=parse_handover(args.handover), seed=args.seed, repo_id=args.repo_id,
+                            vcodec=args.vcodec)
     summary = record_takeovers(config)
     print(f"kept {len(summary.kept)} of {config.episodes} episodes, {summary.frames} expert-labelled frames "
           f"-> {summary.root}")

@@ -29,6 +29,7 @@ import sys
 import time
 from pathlib import Path
 
+from colorsort.data.config import CollectConfig
 from colorsort.errors import DataConflictError, StageError
 from colorsort.training import cache
 from colorsort.training.recipes import Recipe
@@ -130,7 +131,7 @@ def label(recipe: Recipe, run_dir: Path, variant: str, k: int, round_: int, out:
     dagger = recipe.dagger
     seed = TAKEOVER_SEED + k * SEED_STRIDE + (round_ - 1) * dagger.episodes
     args = ["--variant", variant, "--episodes", str(dagger.episodes), "--handover", "{},{}".format(*dagger.handover),
-            "--seed", str(seed), "--repo-id", REPO_ID]
+            "--seed", str(seed), "--repo-id", REPO_ID, "--vcodec", CollectConfig.vcodec]  # the demos' codec
     settings = {"colorsort-takeover": ["--policy", run_dir.name, *args]}  # the policy by its run's cache name
     root = out / "data" / cache.name(f"labels-{variant}-r{round_}", settings)
     if (root / cache.SETTINGS_FILE).is_file():

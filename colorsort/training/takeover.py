@@ -22,6 +22,7 @@ from colorsort.benchmark.evaluate import observation_settings
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.policies import LeRobotPolicy
 from colorsort.cell.privileged import take_over_view
+from colorsort.data.config import VCODECS, CollectConfig
 from colorsort.data.schema import features, frame
 from colorsort.errors import ConfigError
 from colorsort.expert.factory import make_expert
@@ -45,6 +46,8 @@ class TakeoverConfig:
             a generator seeded by the episode's seed, before the expert takes over.
         seed: the first episode's env seed.
         repo_id: the dataset's LeRobot repo id.
+        vcodec: the camera streams' video codec (``colorsort-collect``'s ``--vcodec``): LeRobot merges the labels
+            with demos only when their features, codec included, are the same.
     """
 
     policy: str
@@ -54,9 +57,12 @@ class TakeoverConfig:
     handover: tuple[int, int] = (20, 200)
     seed: int = TAKEOVER_SEED
     repo_id: str = "local/colorsort-takeover"
+    vcodec: str = CollectConfig.vcodec
 
     def __post_init__(self) -> None:
         get_variant(self.variant)  # ConfigError naming the valid variants
+        if self.vcodec not in VCODECS:
+            raise ConfigError(f"Unknown vcodec {self.vcodec!r}. Valid codecs: {list(VCODECS)}")
         if self.episodes < 1:
             raise ConfigError(f"episodes={self.episodes}: give at least 1")
         lo, hi = self.handover
@@ -86,6 +92,7 @@ def handover_step(seed: int, handover: tuple[int, int]) -> int:
 def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
     """Play ``config.episodes`` episodes, the policy first and the expert from the handover on; save every episode
     the expert finished right as a LeRobot episode of its frames. The dataset is finalized whatever stops it."""
+    from lerobot.configs.video import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     root = Path(config.out)
@@ -98,7 +105,8 @@ def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
     summary = TakeoverSummary(str(root))
     seeds = [config.seed + i for i in range(config.episodes)]
     dataset = LeRobotDataset.create(config.repo_id, gym.fps, features(gym.env, cameras, image_size), root=root,
-                                    robot_type=gym.variant.robot, use_videos=True, video_backend="pyav")
+                                    robot_type=gym.variant.robot, use_videos=True, video_backend="pyav",
+                                    rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec))
     expert = make_expert(gym.env)
     try:
         for seed in seeds:
