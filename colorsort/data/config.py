@@ -16,6 +16,12 @@ FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number o
 VCODECS = ("h264", "libsvtav1", "hevc")
 
 
+def check_vcodec(vcodec: str) -> None:
+    """ConfigError naming the valid codecs unless ``vcodec`` is one of ``VCODECS``."""
+    if vcodec not in VCODECS:
+        raise ConfigError(f"Unknown vcodec {vcodec!r}. Valid codecs: {list(VCODECS)}")
+
+
 @dataclass(frozen=True)
 class CollectConfig:
     """What to record and where."""
@@ -57,8 +63,7 @@ class CollectConfig:
             raise ConfigError(f"cameras={self.cameras}: give distinct names from {list(CAMERAS)}, or none")
         if self.fps not in FPS_CHOICES:
             raise ConfigError(f"fps={self.fps} not supported. Valid values: {list(FPS_CHOICES)}")
-        if self.vcodec not in VCODECS:
-            raise ConfigError(f"Unknown vcodec {self.vcodec!r}. Valid codecs: {list(VCODECS)}")
+        check_vcodec(self.vcodec)
         check_range("episodes", self.episodes, 1, 1_000_000)
         check_range("boxes_per_episode", self.boxes_per_episode, 1, 100)
         self.executor_config  # noqa: B018 - validates executor, workers, retries and address

@@ -22,7 +22,7 @@ from colorsort.benchmark.evaluate import observation_settings
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.policies import LeRobotPolicy
 from colorsort.cell.privileged import take_over_view
-from colorsort.data.config import VCODECS, CollectConfig
+from colorsort.data.config import CollectConfig, check_vcodec
 from colorsort.data.schema import features, frame
 from colorsort.errors import ConfigError
 from colorsort.expert.factory import make_expert
@@ -61,8 +61,7 @@ class TakeoverConfig:
 
     def __post_init__(self) -> None:
         get_variant(self.variant)  # ConfigError naming the valid variants
-        if self.vcodec not in VCODECS:
-            raise ConfigError(f"Unknown vcodec {self.vcodec!r}. Valid codecs: {list(VCODECS)}")
+        check_vcodec(self.vcodec)
         if self.episodes < 1:
             raise ConfigError(f"episodes={self.episodes}: give at least 1")
         lo, hi = self.handover
