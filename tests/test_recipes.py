@@ -31,7 +31,7 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
         assert arg in cmd
     assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", {"demos.image_size": 32}),
                                                           tmp_path, 1, 1, tmp_path)
-    assert recipe.policy.execution == "chunk8" and recipe.label.startswith("diffusion, ")
+    assert recipe.policy.execution == "chunk8-ddpm10" and recipe.label.startswith("diffusion, ")
     assert not any(a.startswith("--policy.type=act") or "dim_model" in a for a in cmd)
     with pytest.raises(ValueError, match="multiple of"):
         DiffusionSettings(horizon=10)
@@ -41,6 +41,34 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
         DiffusionSettings(crop_fraction=0.2)
     assert exit_status(main, ["--recipe", "camera-diffusion", "--policy.lr_schedule=cosine",
                               "--out", str(tmp_path)]) == 2
+
+
+def test_the_diffusion_recipe_takes_its_denoiser_settings_and_names_its_evaluations_by_them(tmp_path):
+    """What the U-Net predicts, the schedulers and the rate reach ``lerobot-train``; the scheduler and the denoising
+    steps are inference settings (a new run folder only for what changes the weights), and the evaluation's file
+    name carries them, so that an evaluation under other ones is never reused; bad values name the valid ones."""
+    from colorsort.training.policy_settings import DiffusionSettings
+    from colorsort.training.stages import train_command, train_settings
+
+    _, recipe = colorsort_baseline.parse_args(["--recipe", "camera-diffusion", "--policy.prediction_type=sample",
+                                               "--policy.noise_scheduler_type=DDIM", "--policy.optimizer_lr=3e-4",
+                                               "--policy.scheduler_warmup_steps=200"])
+    cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
+    for arg in ("--policy.prediction_type=sample", "--policy.noise_scheduler_type=DDIM",
+                "--policy.optimizer_lr=0.0003", "--policy.scheduler_warmup_steps=200",
+                "--policy.num_train_timesteps=100"):
+        assert arg in cmd
+    ddpm = recipe.override({"policy.noise_scheduler_type": "DDPM"})
+    assert cache.key(train_settings(ddpm)) == cache.key(train_settings(recipe))  # the same training
+    assert cache.key(train_settings(get_recipe("camera-diffusion"))) != cache.key(train_settings(recipe))
+    assert (recipe.policy.execution, ddpm.policy.execution) == ("chunk8-ddim10", "chunk8-ddpm10")
+    assert recipe.policy.inference()["noise_scheduler_type"] == "DDIM"
+    with pytest.raises(ValueError, match=r"valid types are \['epsilon', 'sample'\]"):
+        DiffusionSettings(prediction_type="v_prediction")
+    with pytest.raises(ValueError, match=r"valid schedulers are \['DDPM', 'DDIM'\]"):
+        DiffusionSettings(noise_scheduler_type="PNDM")
+    with pytest.raises(ValueError, match="num_inference_steps=20: give 1 to num_train_timesteps"):
+        DiffusionSettings(num_train_timesteps=10, num_inference_steps=20)
 
 
 def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(tmp_path):
@@ -53,7 +81,7 @@ def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(
     cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
     assert "--policy.optimizer_lr=0.0003" in cmd and "--policy.optimizer_lr_backbone=0.0003" in cmd
     assert cache.key(train_settings(recipe)) != cache.key(train_settings(get_recipe("camera")))
-    assert exit_status(colorsort_baseline.main, ["--recipe", "camera-diffusion", "--policy.optimizer_lr=3e-4",
+    assert exit_status(colorsort_baseline.main, ["--recipe", "camera-diffusion", "--policy.optimizer_lr_backbone=3e-4",
                                                  "--out", str(tmp_path)]) == 2
 
 

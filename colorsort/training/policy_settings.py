@@ -16,6 +16,8 @@ from dataclasses import asdict, dataclass, field
 from colorsort.errors import ConfigError
 
 LR_SCHEDULES = ("constant", "cosine")
+NOISE_SCHEDULERS = ("DDPM", "DDIM")  # diffusers' schedulers LeRobot's diffusion policy builds
+PREDICTION_TYPES = ("epsilon", "sample")  # what the U-Net predicts: the noise added, or the clean actions
 DEFAULT_LR = 1e-4  # ACT's learning rate here, its backbone's too
 
 
@@ -120,7 +122,12 @@ class DiffusionSettings:
     spatial_softmax_num_keypoints: int = 32
     use_separate_rgb_encoder_per_camera: bool = False
     pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
-    num_inference_steps: int = 10  # denoising steps per inference (of 100 in training)
+    num_inference_steps: int = 10  # denoising steps per inference (of num_train_timesteps in training)
+    noise_scheduler_type: str = "DDPM"  # DDIM: deterministic denoising in few steps; the same training either way
+    num_train_timesteps: int = 100  # the forward diffusion's steps
+    prediction_type: str = "epsilon"  # "sample": the U-Net predicts the clean actions instead of the noise
+    optimizer_lr: float = DEFAULT_LR  # Adam's rate at the end of the warm-up, then annealed (cosine) to 0
+    scheduler_warmup_steps: int = 500  # updates of linear warm-up [updates]
     crop_fraction: float = 0.9  # the crop's side as a fraction of the image's
     type: str = field(default="diffusion", init=False)  # lerobot-train's --policy.type
     name = "diffusion"  # in tables
@@ -137,22 +144,37 @@ class DiffusionSettings:
                              f"({2 ** len(self.down_dims)}), with at least one level in down_dims")
         if not 0.5 <= self.crop_fraction <= 1:
             raise ConfigError(f"crop_fraction={self.crop_fraction}: give 0.5 to 1 (1: no crop)")
+        if self.noise_scheduler_type not in NOISE_SCHEDULERS:
+            raise ConfigError(f"noise_scheduler_type={self.noise_scheduler_type!r}: valid schedulers are "
+                             f"{list(NOISE_SCHEDULERS)}")
+        if self.prediction_type not in PREDICTION_TYPES:
+            raise ConfigError(f"prediction_type={self.prediction_type!r}: valid types are {list(PREDICTION_TYPES)}")
+        if not 1 <= self.num_inference_steps <= self.num_train_timesteps:
+            raise ConfigError(f"num_inference_steps={self.num_inference_steps}: give 1 to num_train_timesteps "
+                             f"({self.num_train_timesteps})")
+        if self.optimizer_lr <= 0 or self.scheduler_warmup_steps < 0:
+            raise ConfigError(f"optimizer_lr={self.optimizer_lr}, scheduler_warmup_steps={self.scheduler_warmup_steps}: "
+                             "give a positive rate and 0 or more updates")
 
     @property
     def execution(self) -> str:
-        """How the predictions are executed, for file names: ``chunk8``."""
-        return f"chunk{self.n_action_steps}"
+        """How the predictions are executed, for file names: ``chunk8-ddpm10`` (actions executed, the scheduler and
+        its denoising steps: every inference setting, so that an evaluation under others is never reused)."""
+        return f"chunk{self.n_action_steps}-{self.noise_scheduler_type.lower()}{self.num_inference_steps}"
 
-    def inference(self) -> dict[str, float | int | None]:
-        """The settings that change how a trained diffusion policy acts but not what it learns."""
-        return {"n_action_steps": self.n_action_steps, "num_inference_steps": self.num_inference_steps}
+    def inference(self) -> dict[str, float | int | str | None]:
+        """The settings that change how a trained diffusion policy acts but not what it learns (DDIM and DDPM
+        add noise alike in training, and differ only in how they take it away)."""
+        return {"n_action_steps": self.n_action_steps, "num_inference_steps": self.num_inference_steps,
+                "noise_scheduler_type": self.noise_scheduler_type}
 
     def crop(self, image_size: int) -> int:
         """The crop's side [px] for square images of ``image_size`` px."""
         return round(self.crop_fraction * image_size)
 
     def args(self, image_size: int) -> list[str]:
-        """``lerobot-train``'s arguments; LeRobot's own optimizer and schedule (Adam 1e-4, cosine, 500 warm-up)."""
+        """``lerobot-train``'s arguments; LeRobot's own optimizer and schedule (Adam, cosine after a warm-up) at the
+        settings' rate and warm-up."""
         policy = {k: v for k, v in asdict(self).items() if k not in ("crop_fraction", "type")}
         args = [f"--policy.{k}={_text(v)}" for k, v in policy.items()]
         if self.crop_fraction < 1:
@@ -163,7 +185,9 @@ class DiffusionSettings:
         """One sentence of a shipped policy's README: its size and how it acts."""
         return (f"LeRobot diffusion policy ({parameters / 1e6:.2f} M parameters, a U-Net of "
                 f"{', '.join(map(str, self.down_dims))} channels over {self.horizon} actions of which "
-                f"{self.n_action_steps} are executed, {self.num_inference_steps} denoising steps, "
+                f"{self.n_action_steps} are executed, predicting the {'noise' if self.prediction_type == 'epsilon' else 'actions'} "
+                f"over {self.num_train_timesteps} diffusion steps, {self.num_inference_steps} {self.noise_scheduler_type} "
+                f"denoising steps, learning rate {self.optimizer_lr}, "
                 f"{self.n_obs_steps} observation{'s' if self.n_obs_steps > 1 else ''} per prediction, "
                 f"ResNet-18 with GroupNorm and a spatial softmax of {self.spatial_softmax_num_keypoints} "
                 f"keypoints, random crops of {self.crop_fraction:g} of each side)")
