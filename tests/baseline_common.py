@@ -15,7 +15,8 @@ from colorsort.errors import StageError
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 SHIPPED = {name: REPO / "baselines" / name
-           for name in ("act-state", "act-camera", "act-camera-snapshot", "act-camera-tracking")}
+           for name in ("act-state", "act-camera", "act-camera-snapshot", "act-camera-tracking",
+                        "act-camera-tracking-fast-dagger")}
 
 
 def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProcess:

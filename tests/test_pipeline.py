@@ -181,8 +181,8 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
 def test_a_dagger_round_adds_the_experts_labels_of_the_policys_states_and_trains_again(tmp_path, in_process, capsys):
     """--dagger.rounds=1, tiny, from the cameras: the first policy plays a `default` episode, the expert takes over
     after 5 steps and labels the states from there (their own task text, the demos' cameras and video codec), the
-    labels join the demo, a second policy is trained on both from scratch and is the one scored; the same command
-    again reuses every stage."""
+    labels join the demo, a second policy is trained on both from scratch and is the one scored, its minutes (the
+    row's and each checkpoint's) counting both trainings; the same command again reuses every stage."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     from colorsort.training.takeover import PROVENANCE, TAKEOVER_SEED, TAKEOVER_TASK
@@ -214,6 +214,9 @@ def test_a_dagger_round_adds_the_experts_labels_of_the_policys_states_and_trains
     results = json.loads((out / "results.json").read_text())
     (row,) = results["rows"]
     assert row["frames"] == root[merged].num_frames and results["recipe"]["dagger"]["rounds"] == 1
+    walls = [json.loads(run.with_name(run.name + ".json").read_text())["wall_s"] for run in (first[0], second[0])]
+    assert row["train_minutes"] == pytest.approx(sum(walls) / 60, abs=0.01)  # both rounds' training
+    assert results["curve"][-1]["minutes"] * 60 > walls[0] + walls[1] / 2  # the first round counts behind it
     assert list((out / "eval").glob(f"{second[0].name}-*-default-*.json"))  # the second policy is scored
     assert f"| default | {get_recipe('camera', {'dagger.rounds': 1}).label} | 1 |" in printed
 

@@ -19,9 +19,10 @@ def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
     if not SHIPPED[name].is_dir():
         pytest.skip(f"baselines/{name} is not shipped")
     shipped = json.loads((SHIPPED[name] / "scores.json").read_text())
-    variant = shipped["recipe"]["main_variant"]
+    recipe = shipped["recipe"]  # in sections since DAgger's rounds became a setting; flat before
+    variant = recipe.get("evaluation", recipe)["main_variant"]
     largest = max(r["demos_tried"] for r in shipped["rows"])
-    seed = shipped["recipe"]["seeds"][0]  # the shipped policy: the largest demo set's first training seed
+    seed = recipe.get("training", recipe)["seeds"][0]  # the shipped policy: the largest demo set's first seed
     (scored,) = [r for r in shipped["rows"] if (r["variant"], r["demos_tried"], r["seed"]) == (variant, largest, seed)]
     first = scored["per_episode"][0]
     placed_at = min(b["time"] for b in first["boxes"] if b["outcome"] == "placed")  # [s]

@@ -117,16 +117,19 @@ def dagger(recipe: Recipe, n: int, data: Path, run_dir: Path, timing: dict, step
            out: Path) -> tuple[Path, dict, Path]:
     """DAgger's rounds after the first training (``recipe.dagger``): each round's policy plays every training
     variant, the expert labels the states it reached, the labels join the training set and a new policy is trained
-    on it from scratch. The last round's run, its timing (wall time: every round's training summed) and its
-    training set."""
-    wall_s = timing["wall_s"]
+    on it from scratch. The last round's run, its timing and its training set.
+
+    The timing counts every round's training: its wall time is their sum, and its start is moved back by the earlier
+    rounds' training, so that a checkpoint's minutes (``stages.checkpoints``) are all the training behind it."""
+    earlier_s = 0.0
     for round_ in range(1, recipe.dagger.rounds + 1):
+        earlier_s += timing["wall_s"]
         labels = [stages.label(recipe, run_dir, variant, k, round_, out)
                   for k, variant in enumerate(recipe.demos.train_variants)]
         data = stages.add_labels(recipe, data, labels, f"demos-{n}-dagger{round_}", out)
         run_dir, timing = stages.train(recipe, data, steps, seed, out)
-        wall_s += timing["wall_s"]
-    return run_dir, {**timing, "wall_s": round(wall_s, 1)}, data
+    return run_dir, {**timing, "started": timing["started"] - earlier_s,
+                     "wall_s": round(earlier_s + timing["wall_s"], 1)}, data
 
 
 def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
