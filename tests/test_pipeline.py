@@ -161,7 +161,7 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
     from colorsort.benchmark.evaluate import observation_settings
 
     out = tmp_path / "diffusion"
-    status, printed = baseline_main(["--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=default:1",
+    status, printed = baseline_main(["--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=lighting:1",
                                      "--demos.boxes_per_episode=1", "--training.steps=2", "--training.seeds=1000",
                                      "--training.batch_size=2", "--training.num_workers=0",
                                      "--evaluation.variants=default", "--evaluation.episodes=1",
@@ -171,9 +171,9 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
     (model,) = (out / "train").glob("demos-1-*-2steps-*-seed1000/checkpoints/last/pretrained_model")
     config = json.loads((model / "config.json").read_text())
     assert config["type"] == "diffusion"
-    assert set(config["input_features"]) == {"observation.state", "observation.images.sensor",
-                                             "observation.images.wrist"}
-    assert observation_settings(str(model), None, None) == (("sensor", "wrist"), (64, 64))
+    assert set(config["input_features"]) == {"observation.state", "observation.images.snapshot"}
+    assert (config["prediction_type"], config["noise_scheduler_type"]) == ("sample", "DDIM")
+    assert observation_settings(str(model), None, None) == (("snapshot",), (64, 64))
     assert f"| default | {get_recipe('camera-diffusion').label} | 1 | 2 steps" in printed
 
 

@@ -31,7 +31,7 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
         assert arg in cmd
     assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", {"demos.image_size": 32}),
                                                           tmp_path, 1, 1, tmp_path)
-    assert recipe.policy.execution == "chunk8-ddpm10" and recipe.label.startswith("diffusion, ")
+    assert recipe.policy.execution == "chunk8-ddim10" and recipe.label.startswith("diffusion, ")
     assert not any(a.startswith("--policy.type=act") or "dim_model" in a for a in cmd)
     with pytest.raises(ValueError, match="multiple of"):
         DiffusionSettings(horizon=10)
@@ -50,19 +50,23 @@ def test_the_diffusion_recipe_takes_its_denoiser_settings_and_names_its_evaluati
     from colorsort.training.policy_settings import DiffusionSettings
     from colorsort.training.stages import train_command, train_settings
 
-    _, recipe = colorsort_baseline.parse_args(["--recipe", "camera-diffusion", "--policy.prediction_type=sample",
-                                               "--policy.noise_scheduler_type=DDIM", "--policy.optimizer_lr=3e-4",
-                                               "--policy.scheduler_warmup_steps=200"])
-    cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
+    preset = get_recipe("camera-diffusion")
     for arg in ("--policy.prediction_type=sample", "--policy.noise_scheduler_type=DDIM",
                 "--policy.optimizer_lr=0.0003", "--policy.scheduler_warmup_steps=200",
                 "--policy.num_train_timesteps=100"):
+        assert arg in train_command(preset, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
+    _, recipe = colorsort_baseline.parse_args(["--recipe", "camera-diffusion", "--policy.prediction_type=epsilon",
+                                               "--policy.noise_scheduler_type=DDPM", "--policy.optimizer_lr=1e-4",
+                                               "--policy.scheduler_warmup_steps=500"])
+    cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
+    for arg in ("--policy.prediction_type=epsilon", "--policy.noise_scheduler_type=DDPM",
+                "--policy.optimizer_lr=0.0001", "--policy.scheduler_warmup_steps=500"):
         assert arg in cmd
-    ddpm = recipe.override({"policy.noise_scheduler_type": "DDPM"})
-    assert cache.key(train_settings(ddpm)) == cache.key(train_settings(recipe))  # the same training
-    assert cache.key(train_settings(get_recipe("camera-diffusion"))) != cache.key(train_settings(recipe))
-    assert (recipe.policy.execution, ddpm.policy.execution) == ("chunk8-ddim10", "chunk8-ddpm10")
-    assert recipe.policy.inference()["noise_scheduler_type"] == "DDIM"
+    ddim = recipe.override({"policy.noise_scheduler_type": "DDIM"})
+    assert cache.key(train_settings(ddim)) == cache.key(train_settings(recipe))  # the same training
+    assert cache.key(train_settings(preset)) != cache.key(train_settings(recipe))
+    assert (recipe.policy.execution, ddim.policy.execution) == ("chunk8-ddpm10", "chunk8-ddim10")
+    assert ddim.policy.inference()["noise_scheduler_type"] == "DDIM"
     with pytest.raises(ValueError, match=r"valid types are \['epsilon', 'sample'\]"):
         DiffusionSettings(prediction_type="v_prediction")
     with pytest.raises(ValueError, match=r"valid schedulers are \['DDPM', 'DDIM'\]"):

@@ -17,7 +17,8 @@ fields; ``Recipe`` checks how they fit together. Every field is a ``colorsort-ba
   ray, held until the next). The policy in ``baselines/act-camera-snapshot``.
 - ``camera-tracking``: the live ``sensor``, the ``snapshot`` and the ``wrist`` at 64 px on the never-stopping
   belt. The policy in ``baselines/act-camera-tracking``.
-- ``camera-diffusion``: ``camera``'s demos at 64 px, learned by LeRobot's diffusion policy.
+- ``camera-diffusion``: ``camera-snapshot``'s demos at 64 px, learned by LeRobot's diffusion policy predicting
+  the actions (not the noise), denoised in 10 DDIM steps.
 - ``camera-large``: the ``snapshot`` and ``wrist`` cameras at 128 px for LeRobot's ACT size, on a GPU.
 
 Why each preset is what it is, with the measurements: docs/baselines.md.
@@ -35,7 +36,7 @@ from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
-from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SMALL_DIFFUSION, TRACKING_ACT, PolicySettings
+from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SNAPSHOT_DIFFUSION, TRACKING_ACT, PolicySettings
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, VARIANTS, get_variant
 
 # the ``lighting`` variant's warm-to-cold tints as colour temperatures [K] (its brightness: LIGHT_BRIGHTNESS)
@@ -372,9 +373,10 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
            TRACKING_ACT, TrainSettings(steps=3600, save_every=1200, seeds=(1001, 1000, 1002), batch_size=32),
            EvalSettings(main_variant="tracking", variants=TRACKING_VARIANTS, select_episodes=10)),
     Recipe("camera-diffusion",
-           DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("sensor", "wrist"), image_size=64,
-                        perturbations=(LatePass(100),)),
-           SMALL_DIFFUSION, TrainSettings(steps=4500, save_every=1125, batch_size=32)),
+           DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot",), image_size=64,
+                        perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75))),
+           SNAPSHOT_DIFFUSION, TrainSettings(steps=6000, save_every=1500, seeds=(1001, 1000, 1002), batch_size=32),
+           EvalSettings(select_episodes=10)),
     Recipe("camera-large",
            DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot", "wrist"), image_size=128,
                         perturbations=(LatePass(100),)),
