@@ -41,14 +41,15 @@ def scores(rows: list[dict], recipe: dict | None = None) -> dict:
     return {"recipe": recipe or {"cameras": []}, "command": "cmd", "started": "then", "wall_s": 1.0, "rows": rows}
 
 
-def run_in_process(cmd: list[str], log: Path) -> float:
+def run_in_process(cmd: list[str], log: Path, append: bool = False) -> float:
     """``stages.run`` without a new interpreter (seconds of imports each: LeRobot's alone take 10 to 15 s here): the
     same arguments to the same console script's entry point (``helpers.console_script``), its output to ``log``."""
     print("$ " + shlex.join(cmd), flush=True)
     log.parent.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     done = console_script(Path(cmd[0]).name, cmd[1:], Path.cwd())
-    log.write_text(done.stdout + done.stderr)
+    with log.open("a" if append else "w") as f:
+        f.write(done.stdout + done.stderr)
     if done.returncode != 0:
         raise StageError(f"exit code {done.returncode}: {shlex.join(cmd)}\n{log.read_text()[-3000:]}")
     return time.perf_counter() - started

@@ -6,6 +6,7 @@ import os
 import re
 import shutil
 import subprocess
+import time
 from pathlib import Path
 
 import cv2
@@ -41,8 +42,9 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path, in_proce
     aggregate_datasets), trained for 2 steps with a checkpoint after each; both checkpoints play
     the validation seeds (never the evaluation seeds) and the chosen one is scored, one episode per variant; the
     learning curve; the shipped policy, which takes the tracking belt's 24 state inputs. Then the same command again
-    reuses every finished stage, and a shorter run is taken from the longer one, bit for bit what lerobot-train
-    makes. (Several training seeds' tables: the pipeline's test with fake stages.)"""
+    reuses every finished stage, a shorter run is taken from the longer one, bit for bit what lerobot-train
+    makes, and a run interrupted after a checkpoint resumes from it. (Several training seeds' tables: the
+    pipeline's test with fake stages.)"""
     from colorsort.variants import VALIDATION_SEEDS
 
     out, ship = tmp_path / "baseline", tmp_path / "shipped"
@@ -115,6 +117,34 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path, in_proce
     taken, made = (load_file(root / "train" / run_name / "checkpoints" / "last" / "pretrained_model"
                              / "model.safetensors") for root in (out, fresh))
     assert taken.keys() == made.keys() and all(torch.equal(taken[k], made[k]) for k in taken)
+
+    # interrupted after its first checkpoint (as a killed run leaves it), the 2-update run resumes from there: from
+    # its weights and its optimizer's state (Adam's step count goes on to 2); the wait is not counted as training
+    run_dir = out / "train" / run_dir.name
+    whole = load_file(run_dir / "checkpoints" / "000002" / "pretrained_model" / "model.safetensors")
+    after_one = load_file(run_dir / "checkpoints" / "000001" / "pretrained_model" / "model.safetensors")
+    shutil.rmtree(run_dir / "checkpoints" / "000002")
+    (run_dir / "checkpoints" / "last").unlink()
+    (run_dir / "checkpoints" / "last").symlink_to("000001")
+    first_saved = (run_dir / "checkpoints" / "000001" / "training_state" / "training_step.json").stat().st_mtime
+    run_dir.with_name(run_dir.name + ".json").unlink()
+    run_dir.with_name(run_dir.name + ".running.json").write_text(json.dumps(
+        {"started": first_saved - 30, "settings": {}, "resumed": []}))
+    time.sleep(2)  # the gap between the interruption and the resumption
+    status, resumed = baseline_main(argv + ["--until", "train"], capsys)
+    assert status == 0 and f"resuming {run_dir} after 1 updates" in resumed and "removing" not in resumed
+    again = load_file(run_dir / "checkpoints" / "last" / "pretrained_model" / "model.safetensors")
+    assert again.keys() == whole.keys() and not all(torch.equal(again[k], after_one[k]) for k in whole)
+    adam = load_file(run_dir / "checkpoints" / "last" / "training_state" / "optimizer_state.safetensors")
+    counts = {float(v) for k, v in adam.items() if k.endswith("/step")}
+    assert counts == {2.0}, counts
+    timing = json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
+    assert not run_dir.with_name(run_dir.name + ".running.json").exists()
+    (resumption,) = timing["resumed"]
+    assert resumption["step"] == 1 and resumption["kept_s"] == 30.0 and resumption["gap_s"] >= 2
+    saved = stages.checkpoints(run_dir, timing)
+    assert [step for step, _, _ in saved] == [1, 2]
+    assert saved[0][1] == pytest.approx(0.5, abs=0.01) and 0.5 < saved[1][1] <= timing["wall_s"] / 60 + 0.01
 
 
 @pytest.mark.slow
@@ -266,6 +296,46 @@ def fake_run(run_dir: Path, steps: int, scheduler: str | None, started: float, s
                                                                      "wall_s": steps * seconds_each}))
 
 
+def test_a_run_resumed_twice_counts_only_the_training_it_kept(tmp_path, monkeypatch):
+    """Killed after its first checkpoint, resumed, killed again before the next one and resumed again: the run's
+    training time is the time to its first checkpoint plus the last segment's; the waits and the lost updates are
+    not, and its checkpoints' minutes agree with that. lerobot-train is asked to resume, into the same folder."""
+    from colorsort.training import stages
+
+    recipe = get_recipe("camera")
+    run_dir = tmp_path / "train" / f"demos-8-2steps-{cache.key(stages.train_settings(recipe))}-seed1000"
+    now = time.time()
+    started = now - 1000
+    fake_run(run_dir, 1, None, started=started, seconds_each=100)  # checkpoint 1 saved at started + 100
+    run_dir.with_name(run_dir.name + ".json").unlink()  # killed: no timing, the marker instead
+    first = {"step": 1, "at": started + 500, "kept_s": 100.0, "gap_s": 400.0}
+    run_dir.with_name(run_dir.name + ".running.json").write_text(json.dumps(
+        {"started": started, "settings": {"s": 1}, "resumed": [first]}))
+    commands = []
+
+    def resumed_training(cmd: list[str], log: Path, append: bool = False) -> float:
+        commands.append((cmd, append))
+        fake_checkpoint = run_dir / "checkpoints" / "000002"
+        shutil.copytree(run_dir / "checkpoints" / "000001", fake_checkpoint)
+        os.utime(fake_checkpoint / "training_state" / "training_step.json", (now + 60, now + 60))
+        (run_dir / "checkpoints" / "last").unlink()
+        (run_dir / "checkpoints" / "last").symlink_to("000002")
+        return 60.0
+
+    monkeypatch.setattr(stages, "run", resumed_training)
+    out_dir, timing = stages.train(recipe, tmp_path / "demos-8", 2, 1000, tmp_path)
+    ((cmd, append),) = commands
+    assert out_dir == run_dir and append and "--resume=true" in cmd and f"--output_dir={run_dir}" in cmd
+    assert f"--config_path={run_dir}/checkpoints/last/pretrained_model/train_config.json" in cmd
+    assert timing["resumed"][0] == first and timing["resumed"][1]["kept_s"] == 0.0
+    assert timing["resumed"][1]["gap_s"] == pytest.approx(500, abs=5)
+    assert timing["wall_s"] == pytest.approx(160, abs=5) and timing["settings"] == {"s": 1}
+    minutes = [m for _, m, _ in stages.checkpoints(run_dir, timing)]
+    assert minutes == pytest.approx([100 / 60, 160 / 60], abs=0.1)
+    assert not run_dir.with_name(run_dir.name + ".running.json").exists()
+    assert stages.train(recipe, tmp_path / "demos-8", 2, 1000, tmp_path) == (run_dir, timing)  # finished: reused
+
+
 def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_rate(tmp_path, monkeypatch):
     """With no schedule, a run of 2 updates is the first 2 of a run of 3 with the same data, settings and seed:
     taken from it (checkpoints, save times, its time to reach 2) instead of trained. Never from another seed's
@@ -273,7 +343,7 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
     from colorsort.training import stages
 
     trained = []
-    monkeypatch.setattr(stages, "run", lambda cmd, log: trained.append(cmd) or 0.0)
+    monkeypatch.setattr(stages, "run", lambda cmd, log, append=False: trained.append(cmd) or 0.0)
     train = tmp_path / "train"
     recipe = get_recipe("camera")
     cosine = get_recipe("camera", {"policy.lr_schedule": "cosine"})

@@ -8,7 +8,8 @@ Layout of the working folder ``out``::
     data/labels-<variant>-r<R>-<key>/  colorsort-takeover's expert labels of DAgger round R on one variant
     data/demos-<N>-dagger<R>-<key>/  round R's training set: round R-1's with round R's labels merged
     train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its
-                              timing and settings; under a constant rate, the first S updates of a longer run
+                              timing and settings; under a constant rate, the first S updates of a longer run;
+                              <run>.running.json while it trains (an interrupted run resumes from its last checkpoint)
     eval/<run>[-at<U>]-<exec>-<variant>-<key>.json  colorsort-eval's report of the run's last checkpoint (or
                               the one after U updates, when the validation seeds chose it), executing its chunks
                               as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
@@ -40,12 +41,13 @@ SEED_STRIDE = 1_000_000  # training variant k's demos use seeds k * SEED_STRIDE 
 RUN_ENV = {"HF_HUB_OFFLINE": "1"}  # no hub downloads in any stage
 
 
-def run(cmd: list[str], log: Path) -> float:
-    """Run ``cmd`` (printed first) with its output to ``log``; its wall time [s]. RuntimeError on failure."""
+def run(cmd: list[str], log: Path, append: bool = False) -> float:
+    """Run ``cmd`` (printed first) with its output to ``log`` (after what it holds, if ``append``); its wall time
+    [s]. StageError on failure."""
     print("$ " + shlex.join(cmd), flush=True)
     log.parent.mkdir(parents=True, exist_ok=True)
     t = time.perf_counter()
-    with log.open("w") as f:
+    with log.open("a" if append else "w") as f:
         result = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env={**os.environ, **RUN_ENV})
     if result.returncode != 0:
         raise StageError(f"exit code {result.returncode}: {shlex.join(cmd)}\n{log.read_text()[-3000:]}")
@@ -196,28 +198,61 @@ def train_settings(recipe: Recipe) -> dict:
 
 
 def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
-    """``lerobot-train``; the run folder and its timing ``{"started": unix time, "wall_s": s}`` (reused if there)."""
+    """``lerobot-train``; the run folder and its timing (reused if there, resumed if interrupted).
+
+    The timing is ``{"started": unix time, "wall_s": s, "settings": ...}``, and ``"resumed"`` where the run was
+    interrupted and resumed from its last checkpoint (``resume``): its gaps are not training time."""
     run_dir = out / "train" / f"{data.name}-{steps}steps-{cache.key(train_settings(recipe))}-seed{seed}"
     timing_path = run_dir.with_name(run_dir.name + ".json")  # not with_suffix: "-shift0.1-seed1000" has a dot
+    running_path = run_dir.with_name(run_dir.name + ".running.json")
     if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
         print(f"reusing {run_dir}")
         set_inference(run_dir, recipe)
         return run_dir, json.loads(timing_path.read_text())
-    if run_dir.exists():
-        print(f"removing {run_dir}, an unfinished training run")
-        shutil.rmtree(run_dir)
-    longer = longer_run(run_dir, steps)
-    if longer is not None:
-        print(f"taking the first {steps} updates of {longer}")
-        timing = first_updates(longer, steps, run_dir)
-        timing_path.write_text(json.dumps(timing))
-        set_inference(run_dir, recipe)
-        return run_dir, timing
-    started = time.time()
-    seconds = run(train_command(recipe, data, steps, seed, run_dir), out / "logs" / f"train-{run_dir.name}.log")
-    timing = {"started": started, "wall_s": round(seconds, 1), "settings": train_settings(recipe)}
+    log = out / "logs" / f"train-{run_dir.name}.log"
+    last = run_dir / "checkpoints" / "last"
+    if (last / "training_state" / "training_step.json").is_file() and running_path.is_file():
+        running = resume_marker(running_path, last)
+        print(f"resuming {run_dir} after {running['resumed'][-1]['step']} updates")
+        seconds = run([str(BIN / "lerobot-train"), f"--config_path={last / 'pretrained_model' / 'train_config.json'}",
+                       "--resume=true", f"--dataset.root={data}", f"--output_dir={run_dir}"], log, append=True)
+    else:
+        if run_dir.exists():
+            print(f"removing {run_dir}, an unfinished training run with no checkpoint to resume from")
+            shutil.rmtree(run_dir)
+        longer = longer_run(run_dir, steps)
+        if longer is not None:
+            print(f"taking the first {steps} updates of {longer}")
+            timing = first_updates(longer, steps, run_dir)
+            timing_path.write_text(json.dumps(timing))
+            set_inference(run_dir, recipe)
+            return run_dir, timing
+        running = {"started": time.time(), "settings": train_settings(recipe), "resumed": []}
+        run_dir.parent.mkdir(parents=True, exist_ok=True)
+        running_path.write_text(json.dumps(running))
+        seconds = run(train_command(recipe, data, steps, seed, run_dir), log)
+    kept = sum(r["kept_s"] for r in running["resumed"])
+    timing = {"started": running["started"], "wall_s": round(kept + seconds, 1),
+              "settings": running["settings"], **({"resumed": running["resumed"]} if running["resumed"] else {})}
     timing_path.write_text(json.dumps(timing))
+    running_path.unlink()
     return run_dir, timing
+
+
+def resume_marker(running_path: Path, last: Path) -> dict:
+    """The interrupted run's marker with this resumption added to ``"resumed"``: the update it resumes after, when
+    [unix time], the training kept from the segment it ends (``kept_s``: from the segment's start to its last
+    checkpoint's save) and the gap since that save (``gap_s``: the updates after the checkpoint are lost, the wait is
+    not training; neither counts as training time)."""
+    running = json.loads(running_path.read_text())
+    state = last / "training_state" / "training_step.json"
+    saved, now = state.stat().st_mtime, time.time()
+    segment_start = running["resumed"][-1]["at"] if running["resumed"] else running["started"]
+    running["resumed"].append({"step": json.loads(state.read_text())["step"], "at": now,  # kept 0: no new checkpoint
+                               "kept_s": round(max(0.0, saved - segment_start), 1),
+                               "gap_s": round(now - max(saved, segment_start), 1)})
+    running_path.write_text(json.dumps(running))
+    return running
 
 
 def longer_run(run_dir: Path, steps: int) -> Path | None:
@@ -283,7 +318,8 @@ def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
     for step_dir in sorted((run_dir / "checkpoints").iterdir()):
         if step_dir.name.isdigit() and not step_dir.is_symlink():
             saved = (step_dir / "training_state" / "training_step.json").stat().st_mtime
-            found.append((int(step_dir.name), (saved - timing["started"]) / 60, step_dir / "pretrained_model"))
+            gaps = sum(r["gap_s"] for r in timing.get("resumed", ()) if r["at"] < saved)
+            found.append((int(step_dir.name), (saved - timing["started"] - gaps) / 60, step_dir / "pretrained_model"))
     return found
 
 
