@@ -166,7 +166,9 @@ def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster
     finished episode is kept and it says so; --resume on the same cluster completes the dataset. (Local processes:
     test_collect's interrupted runs.) One shard of 8 episodes on one Ray worker: the interrupt comes when the first
     is saved, 7 to go. A loaded 2-core machine once took so long to deliver the cancel that a shard of 4 (3 to go)
-    finished before it did (a cancel has taken 40 s to reach a task there)."""
+    finished before it did (a cancel has taken 40 s to reach a task there). On a machine loaded enough that even 7
+    episodes end first (once, CI's tests beside a training run), the run is complete and exits 0 as it should:
+    the test checks that and is skipped, for there is nothing to resume."""
     from colorsort.cli.collect import main
 
     out = tmp_path / "ds"
@@ -184,10 +186,15 @@ def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster
     try:
         watcher = threading.Thread(target=ctrl_c, daemon=True)
         watcher.start()
-        assert main(argv) == 130
+        status = main(argv)
         watcher.join()
     finally:
         signal.signal(signal.SIGINT, previous)
+    if status == 0:  # nothing was left when the cancel reached the task: the run is done, and says so
+        assert sorted(json.loads((out / MARKER).read_text())["episodes"]) == list(range(8))
+        same_episodes(out, reference, only=range(4))
+        pytest.skip("the shard finished before the Ctrl-C's cancel reached it (a loaded machine): nothing to resume")
+    assert status == 130
     assert "interrupted: every finished episode is saved" in capsys.readouterr().out
     marker = json.loads((out / MARKER).read_text())
     assert 1 <= len(marker["episodes"]) < 8 and set(marker["episodes"]) == set(marker["tried"])
