@@ -218,7 +218,8 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
                        "--resume=true", f"--dataset.root={data}", f"--output_dir={run_dir}"], log, append=True)
     else:
         if run_dir.exists():
-            print(f"removing {run_dir}, an unfinished training run with no checkpoint to resume from")
+            print(f"removing {run_dir}, an unfinished training run with no checkpoint or no {running_path.name}"
+                  " to resume from")
             shutil.rmtree(run_dir)
         longer = longer_run(run_dir, steps)
         if longer is not None:
@@ -248,8 +249,8 @@ def resume_marker(running_path: Path, last: Path) -> dict:
     state = last / "training_state" / "training_step.json"
     saved, now = state.stat().st_mtime, time.time()
     segment_start = running["resumed"][-1]["at"] if running["resumed"] else running["started"]
-    running["resumed"].append({"step": json.loads(state.read_text())["step"], "at": now,  # kept 0: no new checkpoint
-                               "kept_s": round(max(0.0, saved - segment_start), 1),
+    running["resumed"].append({"step": json.loads(state.read_text())["step"], "at": now,
+                               "kept_s": round(max(0.0, saved - segment_start), 1),  # 0: no checkpoint since
                                "gap_s": round(now - max(saved, segment_start), 1)})
     running_path.write_text(json.dumps(running))
     return running
