@@ -198,6 +198,46 @@ def test_compare_scores_puts_two_runs_side_by_side_per_variant(tmp_path):
     assert lines[4] == "| every variant (mean of the variants' means) | 50% | 25% | | |"
 
 
+def test_curves_puts_runs_learning_curves_on_one_axis_and_refuses_runs_of_different_variants(tmp_path):
+    """``colorsort-analyze curves``: one curve per run on one PNG, labelled; runs whose curves are on different
+    variants, a file without a curve and a wrong number of labels are refused with the reason."""
+    import cv2
+
+    def point(step: int, minutes: float, rate: float) -> dict:
+        return {"step": step, "minutes": minutes, "episodes": 20, "successes": round(20 * rate),
+                "success_rate": rate, "success_ci95": [max(rate - 0.2, 0.0), min(rate + 0.2, 1.0)],
+                "correct": round(60 * rate), "misplaced": 0, "dropped": 0}
+
+    def run(name: str, variant: str, curve: list[dict]) -> str:
+        data = scores([score_row(demos_tried=48, variant=variant)],
+                      {"demos": {"cameras": ["snapshot"]}, "evaluation": {"main_variant": variant}})
+        (tmp_path / name).write_text(json.dumps({**data, "curve": curve}))
+        return name
+
+    act = run("act.json", "default", [point(1000, 10.0, 0.4), point(2000, 19.0, 1.0)])
+    diffusion = run("diffusion.json", "default",
+                    [point(1500, 9.5, 0.05), point(3000, 19.5, 0.3), point(4500, 29.0, 0.4)])
+    out = console_script("colorsort-analyze", ["curves", act, diffusion, "--labels", "ACT,Diffusion Policy",
+                                               "--out", "figs/curves.png"], tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "wrote figs/curves.png: ACT (2 checkpoints), Diffusion Policy (3 checkpoints)"
+    image = cv2.imread(str(tmp_path / "figs" / "curves.png"))
+    assert image is not None and image.shape[0] > 300 and image.shape[1] > 500
+
+    tracking = run("tracking.json", "tracking", [point(1200, 18.0, 0.0)])
+    refused = console_script("colorsort-analyze", ["curves", act, tracking, "--labels", "a,b", "--out", "x.png"],
+                             tmp_path)
+    assert refused.returncode == 2 and "different variants (default, tracking)" in refused.stderr
+    no_curve = run("none.json", "default", [])
+    refused = console_script("colorsort-analyze", ["curves", act, no_curve, "--labels", "a,b", "--out", "x.png"],
+                             tmp_path)
+    assert refused.returncode == 2 and "no learning curve in none.json" in refused.stderr
+    refused = console_script("colorsort-analyze", ["curves", act, diffusion, "--labels", "a", "--out", "x.png"],
+                             tmp_path)
+    assert refused.returncode == 2 and "one label per file: 2 files, 1 labels" in refused.stderr
+    assert not (tmp_path / "x.png").exists()
+
+
 def test_loading_a_checkpoint_prints_nothing_into_a_benchmarks_recorded_figures(capsys):
     """LeRobot's "Loading weights from local directory" stays out of stdout, which benchmarks record to docs/results."""
     from colorsort.benchmark.policies import LeRobotPolicy

@@ -8,6 +8,7 @@ Example::
     colorsort-analyze by-lights --demos datasets/lighting  # the brightness each demo was recorded under
     colorsort-analyze first-box-delay new.json old.json    # how much later one policy places its first box
     colorsort-analyze compare new/scores.json old/scores.json --labels new,old  # two baseline runs per variant
+    colorsort-analyze curves a/scores.json b/results.json --labels ACT,Diffusion --out curves.png  # one axis
 
 Exit status 0, or 2 for files that cannot be compared (their message says why).
 """
@@ -39,11 +40,36 @@ def parser() -> argparse.ArgumentParser:
     compare.add_argument("new", type=Path)
     compare.add_argument("old", type=Path)
     compare.add_argument("--labels", default="new,old", help="two comma-separated column labels")
+    curves = sub.add_parser("curves", help="baseline runs' learning curves on one axis: success against training time")
+    curves.add_argument("scores", nargs="+", type=Path, help="scores.json or results.json files, one curve each")
+    curves.add_argument("--labels", required=True, help="comma-separated, one label per file")
+    curves.add_argument("--out", type=Path, required=True, help="the PNG to write")
     return p
 
 
 def read(path: Path) -> dict:
     return json.loads(path.read_text())
+
+
+def plot_runs(files: list[Path], labels: list[str], out: Path) -> None:
+    """Each run's learning curve (its first seed's checkpoints on its main variant) on one axis, written to ``out``."""
+    from colorsort.training.records import Results
+    from colorsort.training.report import plot_curves
+    from colorsort.training.tables import machine, main_variant
+
+    if len(labels) != len(files):
+        raise ConfigError(f"--labels takes one label per file: {len(files)} files, {len(labels)} labels")
+    runs = [Results.load(f) for f in files]
+    if missing := [str(f) for f, r in zip(files, runs, strict=True) if not r.curve]:
+        raise ConfigError(f"no learning curve in {', '.join(missing)}")
+    variants = {main_variant(r) for r in runs}
+    if len(variants) > 1:
+        raise ConfigError(f"the curves are on different variants ({', '.join(sorted(variants))}); give runs of one")
+    machines = sorted({machine(r) for r in runs})
+    plot_curves([(lab, r.curve) for lab, r in zip(labels, runs, strict=True)], variants.pop(),
+                " / ".join(machines), out)
+    each = (f"{lab} ({len(r.curve)} checkpoints)" for lab, r in zip(labels, runs, strict=True))
+    print(f"wrote {out}: {', '.join(each)}")
 
 
 @guarded("colorsort-analyze")
@@ -70,6 +96,8 @@ def main(argv: list[str] | None = None) -> int:
         median, seeds = first_box_delay(new, old)
         print(f"first box placed {median:+.2f} s later (median over {seeds} seeds, {new['variant']}); "
               f"mean cycle {new['mean_cycle_time_s']:.2f} s against {old['mean_cycle_time_s']:.2f} s")
+    elif args.analysis == "curves":
+        plot_runs(args.scores, args.labels.split(","), args.out)
     else:
         from colorsort.training.compare import compare
         from colorsort.training.records import Results

@@ -122,12 +122,13 @@ def curve_table(points: Sequence[CurvePoint]) -> str:
     return "\n".join(lines)
 
 
-def _errorbars(ax, x: Sequence[float], rates: Sequence[tuple[float, tuple[float, float]]]) -> None:
+def _errorbars(ax, x: Sequence[float], rates: Sequence[tuple[float, tuple[float, float]]],
+               label: str | None = None) -> None:
     """Points at ``x`` of (success rate, its 95% interval)."""
     rate = [100 * r for r, _ in rates]
     lo = [100 * (r - ci[0]) for r, ci in rates]
     hi = [100 * (ci[1] - r) for r, ci in rates]
-    ax.errorbar(x, rate, yerr=[lo, hi], marker="o", capsize=4)
+    ax.errorbar(x, rate, yerr=[lo, hi], marker="o", capsize=4, label=label)
     ax.set_ylim(-2, 102)
     ax.grid(alpha=0.3)
 
@@ -180,19 +181,33 @@ def plot_demos(rows: Sequence[ScoreRow], label: str, variant: str, path: Path) -
 
 def plot_curve(points: Sequence[CurvePoint], label: str, variant: str, machine: str, path: Path) -> None:
     """Success rate on ``variant`` (95% Wilson interval) against minutes of training, each checkpoint annotated."""
+    plot_curves([(label, points)], variant, machine, path,
+                f"{label} learning {variant}, {points[0].episodes} evaluation seeds per checkpoint")
+
+
+def plot_curves(curves: Sequence[tuple[str, Sequence[CurvePoint]]], variant: str, machine: str, path: Path,
+                title: str | None = None) -> None:
+    """Several runs' success on ``variant`` (95% Wilson intervals) against minutes of training on one axis, each
+    checkpoint annotated with its updates, a legend naming each run where there are several."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(5.5, 3.6), dpi=120)
-    minutes = [p.minutes for p in points]
-    _errorbars(ax, minutes, [(p.success_rate, p.success_ci95) for p in points])
-    for p in points:
-        ax.annotate(f"{p.step}", (p.minutes, 100 * p.success_rate), textcoords="offset points",
-                    xytext=(5, -12), fontsize=7)
-    ax.set_xlim(0, max(minutes) * 1.08)
+    several = len(curves) > 1
+    for label, points in curves:
+        minutes = [p.minutes for p in points]
+        _errorbars(ax, minutes, [(p.success_rate, p.success_ci95) for p in points], label if several else None)
+        for p in points:
+            ax.annotate(f"{p.step}", (p.minutes, 100 * p.success_rate), textcoords="offset points",
+                        xytext=(5, -12), fontsize=7)
+    ax.set_xlim(0, max(p.minutes for _, points in curves for p in points) * 1.08)
     ax.set_xlabel(f"training [min], {machine}; labels: updates", fontsize=8)
     ax.set_ylabel(f"success on {variant} [%]")
-    ax.set_title(f"{label} learning {variant}, {points[0].episodes} evaluation seeds per checkpoint", fontsize=9)
+    if several:
+        ax.legend(fontsize=7, loc="best")
+    episodes = sorted({p.episodes for _, points in curves for p in points})
+    ax.set_title(title or f"learning {variant}, {'/'.join(map(str, episodes))} evaluation seeds per checkpoint",
+                 fontsize=9)
     _save(fig, path)

@@ -60,6 +60,13 @@ def machine(scores: Results) -> str:
     return MACHINES[(training if isinstance(training, dict) else recipe).get("device", "cpu")]
 
 
+def main_variant(scores: Results) -> str:
+    """The variant its learning curve was measured on, from its recipe."""
+    recipe = scores.recipe
+    evaluation = recipe.get("evaluation")
+    return (evaluation if isinstance(evaluation, dict) else recipe).get("main_variant", "default")
+
+
 def parameters(checkpoint: Path) -> int | None:
     """The number of weights in ``checkpoint/model.safetensors``, read from the file's header (no tensor is
     loaded); None when there is no such file."""
