@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -208,6 +209,6 @@ def plot_curves(curves: Sequence[tuple[str, Sequence[CurvePoint]]], variant: str
     if several:
         ax.legend(fontsize=7, loc="best")
     episodes = sorted({p.episodes for _, points in curves for p in points})
-    ax.set_title(title or f"learning {variant}, {'/'.join(map(str, episodes))} evaluation seeds per checkpoint",
-                 fontsize=9)
+    title = title or f"learning {variant}, {'/'.join(map(str, episodes))} evaluation seeds per checkpoint"
+    ax.set_title(textwrap.fill(title, 70), fontsize=9)  # a long label would run past the figure's edge
     _save(fig, path)
