@@ -53,18 +53,20 @@ def label(scores: Results) -> str:
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
 
+def section(scores: Results, name: str) -> dict:
+    """A section of the stored recipe ("training"); the whole recipe where it was stored flat (older scores)."""
+    part = scores.recipe.get(name)
+    return part if isinstance(part, dict) else scores.recipe
+
+
 def machine(scores: Results) -> str:
     """Where the policy trained ("on the CPU"), from its recipe's device."""
-    recipe = scores.recipe
-    training = recipe.get("training")
-    return MACHINES[(training if isinstance(training, dict) else recipe).get("device", "cpu")]
+    return MACHINES[section(scores, "training").get("device", "cpu")]
 
 
 def main_variant(scores: Results) -> str:
     """The variant its learning curve was measured on, from its recipe."""
-    recipe = scores.recipe
-    evaluation = recipe.get("evaluation")
-    return (evaluation if isinstance(evaluation, dict) else recipe).get("main_variant", "default")
+    return section(scores, "evaluation").get("main_variant", "default")
 
 
 def parameters(checkpoint: Path) -> int | None:
