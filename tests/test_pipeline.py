@@ -520,6 +520,80 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
         get_recipe("camera-tracking", {"evaluation.select_episodes": len(VALIDATION_SEEDS) + 1})
 
 
+def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(tmp_path, monkeypatch, capsys):
+    """``--add-to DIR`` adds a later run's training seeds (the same recipe and flags, other seeds) to the baseline
+    shipped in DIR: its scores, tables and README gain their rows and the sitting, its policy and learning curve stay
+    the first seed's; another recipe, a seed it holds, no baseline there, or --ship beside it: exit 2, nothing run."""
+    from colorsort.training import ship, tables
+    from colorsort.training.records import Results
+
+    evaluated: list[str] = []
+
+    def fake_evaluate(recipe, model, variant, episodes, stem, envs, log_dir, first_seed=None):
+        step = int(Path(model).parent.name) if Path(model).parent.name.isdigit() else 3
+        seed = int(str(model).split("-seed")[1][:4])
+        evaluated.append(stem.parent.name)
+        successes = {(1000, 2): 2, (1001, 3): 2}.get((seed, step), 0) if first_seed is not None else seed - 999
+        n = 2 if first_seed is not None else episodes
+        return {"policy": str(model), "variant": variant, "episodes": n, "successes": successes,
+                "success_rate": successes / n, "success_ci95": [0.0, 1.0], "correct": 3 * successes, "misplaced": 0,
+                "dropped": 0, "distractors": 0, "distractors_let_through": 0, "boxes_per_minute": 1.0,
+                "mean_cycle_time_s": 2.0, "per_episode": [{"success": k < successes, "correct": 3 * (k < successes),
+                                                           "misplaced": 0, "dropped": 0} for k in range(n)]}
+
+    def fake_train(recipe, data, steps, seed, out):
+        run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
+        fake_run(run_dir, steps, None, started=1e9, seconds_each=60 * (seed - 999))
+        return run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
+
+    monkeypatch.setattr(stages, "collect", lambda recipe, n, out, workers: out / "data" / f"demos-{n}")
+    monkeypatch.setattr(stages, "size", lambda data: (4, 400))
+    monkeypatch.setattr(stages, "train", fake_train)
+    monkeypatch.setattr(stages, "evaluate", fake_evaluate)
+    monkeypatch.setattr(ship, "parameters", lambda model: 1000)  # the fake runs' weights are text
+    flags = ["--recipe", "state-tracking", "--demos.counts=4", "--training.steps=3", "--training.save_every=1",
+             "--evaluation.select_episodes=2", "--evaluation.variants=tracking,tracking-jitter",
+             "--evaluation.episodes=4", "--evaluation.other_episodes=4", "--evaluation.curve_episodes=4"]
+    shipped = tmp_path / "shipped"
+    first = flags + ["--training.seeds=1000", "--out", str(tmp_path / "one"), "--ship", str(shipped)]
+    assert baseline_main(first, capsys)[0] == 0
+    curve_png = (shipped / "learning_curve.png").read_bytes()
+    before = Results.load(shipped / "scores.json")
+    assert before.seeds == (1000,) and before.commit and not before.added
+
+    later = flags + ["--training.seeds=1001", "--out", str(tmp_path / "two")]
+    for argv, says in ((later + ["--add-to", str(tmp_path / "none")], "no scores.json"),
+                       (later + ["--add-to", str(shipped), "--ship", str(tmp_path / "x")], "give one of them"),
+                       ([a.replace("steps=3", "steps=4") for a in later] + ["--add-to", str(shipped)],
+                        "['training.steps']"),
+                       ([a.replace("1001", "1000") for a in later] + ["--add-to", str(shipped)], "seeds [1000]")):
+        capsys.readouterr()
+        assert colorsort_baseline.main(argv) == 2 and says in capsys.readouterr().err
+    assert not (tmp_path / "two").exists()  # refused before any stage ran
+
+    evaluated.clear()
+    status, printed = baseline_main(later + ["--add-to", str(shipped)], capsys)
+    assert status == 0 and "added training seeds [1001] to" in printed
+    assert "curve" not in evaluated  # the baseline's curve is its first seed's
+    after = Results.load(shipped / "scores.json")
+    assert after.seeds == (1000, 1001) and after.recipe["training"]["seeds"] == [1000, 1001]
+    assert after.rows[:2] == before.rows and [(r.seed, r.checkpoint) for r in after.rows[2:]] == [(1001, 3)] * 2
+    assert after.curve == before.curve and after.commit == before.commit and after.command == before.command
+    (sitting,) = after.added
+    assert sitting.seeds == (1001,) and sitting.command.endswith(f"--add-to {shipped}") and sitting.commit
+    assert (shipped / "model.safetensors").read_text() == "weights after 2"  # seed 1000's chosen checkpoint
+    assert (shipped / "learning_curve.png").read_bytes() == curve_png
+    readme = (shipped / "README.md").read_text()
+    assert f"Training seed 1001 added later by `{sitting.command}`" in readme
+    assert "each of the recipe's 2 training seeds (1000, 1001; this policy is seed 1000's)" in readme
+    assert "| tracking | ACT, state | 4 | 3 steps (0.5 passes), scored at 2/3 after 2/6 min" in readme
+    assert "| 1001 | 3 (chosen) |" in readme
+    assert "38% (25-50%), 2 seeds | 25%, 50%" in tables.render(after, "table")  # seed 1000: 1 of 4, 1001: 2 of 4
+    page = f"<!-- scores {shipped.name} table -->\n<!-- end scores -->"
+    assert f"; seed 1001 added by {sitting.command}):" in tables.fill(page, tmp_path)
+    assert colorsort_baseline.main(later + ["--add-to", str(shipped)]) == 2  # seed 1001 is there now
+
+
 def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):
     """Reshipping replaces the tracked files of the folder it ships to: that alone is no uncommitted change."""
     from colorsort.training.ship import commit

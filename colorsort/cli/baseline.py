@@ -18,7 +18,9 @@ LeRobot's ``aggregate_datasets``; a camera recipe's set then loses ``observation
 evaluation seeds, with the learning curve from the checkpoints saved along the way. It prints a Markdown
 table and writes ``OUT/results.json``, ``OUT/success_vs_demos.png`` and ``OUT/learning_curve.png``.
 ``--ship DIR`` copies the largest set's ``pretrained_model`` to DIR with ``scores.json``, the plots and a
-README of how it was made.
+README of how it was made. ``--add-to DIR`` adds the run's training seeds to the baseline shipped in DIR (the
+same recipe and flags but ``--training.seeds``, which names seeds it does not hold): its scores, tables and README
+gain their rows, its policy stays. So a row's seeds can be trained in separate sittings, on other machines.
 
 Finished stages under OUT are reused, each named by a key of the settings that feed it
 (``colorsort.training.cache``), so an interrupted run goes on where it stopped, ``--until`` splits the work
@@ -35,10 +37,11 @@ import sys
 from pathlib import Path
 
 from colorsort.cli.run import guarded
-from colorsort.errors import DataExistsError
+from colorsort.errors import ConfigError, DataExistsError
 from colorsort.training.flags import add_recipe_flags, recipe_changes
 from colorsort.training.pipeline import UNTIL, RunSettings, run_pipeline
 from colorsort.training.recipes import RECIPES, Recipe, get_recipe
+from colorsort.training.ship import addable
 
 
 def parse_args(argv: list[str]) -> tuple[argparse.Namespace, Recipe]:
@@ -55,6 +58,8 @@ def parse_args(argv: list[str]) -> tuple[argparse.Namespace, Recipe]:
     p.add_argument("--out", help="working folder (default outputs/baselines/<recipe>)")
     p.add_argument("--until", default="eval", choices=UNTIL, help="the last stage to run")
     p.add_argument("--ship", help="copy the largest set's policy here with its scores and a README")
+    p.add_argument("--add-to", help="add this run's training seeds to the baseline shipped in this folder (the "
+                   "same recipe and flags but --training.seeds); its policy stays")
     p.add_argument("--fresh", action="store_true", help="delete OUT first instead of reusing its finished stages")
     add_recipe_flags(p, chosen)
     args = p.parse_args(argv)
@@ -81,12 +86,17 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     settings = RunSettings(Path(args.out or f"outputs/baselines/{recipe.name}"), args.workers, args.envs, args.until)
     ship_to = Path(args.ship) if args.ship else None
+    add_to = Path(args.add_to) if args.add_to else None
+    if ship_to and add_to:
+        raise ConfigError("--ship makes a new baseline, --add-to adds seeds to a shipped one: give one of them")
     if ship_to and ship_to.exists() and any(ship_to.iterdir()):
-        raise DataExistsError(f"{ship_to} exists: remove it first, or ship elsewhere")
+        raise DataExistsError(f"{ship_to} exists: remove it first, ship elsewhere, or add seeds with --add-to")
+    if add_to:
+        addable(recipe, add_to)  # ConfigError before any work: another recipe, or seeds it holds
     if args.fresh:
         shutil.rmtree(settings.out, ignore_errors=True)
-    run_pipeline(recipe, settings, shlex.join(["colorsort-baseline", *argv]), ship_to)  # DataConflictError: OUT
-    # holds a stage of other settings, nothing overwritten
+    run_pipeline(recipe, settings, shlex.join(["colorsort-baseline", *argv]), ship_to, add_to)  # DataConflictError:
+    # OUT holds a stage of other settings, nothing overwritten
     return 0
 
 

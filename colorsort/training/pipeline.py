@@ -22,7 +22,7 @@ from colorsort.training import selection, stages
 from colorsort.training.recipes import Recipe
 from colorsort.training.records import CurvePoint, Results, ScoreRow, ValidationPoint, report_from_json
 from colorsort.training.report import first_episodes, plot_curve, plot_demos, summary_table, table
-from colorsort.training.ship import machine, ship
+from colorsort.training.ship import add_seeds, machine, ship
 
 UNTIL = ("data", "train", "eval")
 
@@ -51,9 +51,12 @@ class RunSettings:
                 raise ConfigError(f"{key}={getattr(self, key)}: give at least 1")
 
 
-def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: Path | None = None) -> Results | None:
+def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: Path | None = None,
+                 add_to: Path | None = None) -> Results | None:
     """Every stage of ``recipe`` under ``settings.out``; the results (also written to ``out/results.json``), or None
-    when ``settings.until`` stops before the evaluations."""
+    when ``settings.until`` stops before the evaluations. ``ship_to``: ship the first seed's policy there;
+    ``add_to``: add this run's training seeds to the baseline shipped there (``ship.add_seeds``: its learning curve
+    is its own first seed's, so this run makes none)."""
     out = settings.out
     out.mkdir(parents=True, exist_ok=True)
     started, t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), time.perf_counter()
@@ -91,7 +94,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             rows += scored
             if largest and seed == training.seeds[0]:
                 shipped = model
-                if training.save_every:
+                if training.save_every and add_to is None:
                     curve = learning_curve(recipe, settings, run_dir, timing, scored, chosen)
     if settings.until != "eval":
         print(f"stopped after the {settings.until!r} stage: {out}")
@@ -110,6 +113,8 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
           f"results: {out / 'results.json'}\nwall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
     if ship_to is not None:
         ship(recipe, shipped, results, plots, ship_to, command)
+    if add_to is not None:
+        add_seeds(recipe, results, add_to, command)
     return results
 
 

@@ -4,7 +4,9 @@
   colorsort-eval's ``EvalReport``, and where validation seeds chose the checkpoint, the choice and its points.
 - ``ValidationPoint``: one checkpoint on the validation seeds of every training variant.
 - ``CurvePoint``: one checkpoint on the main variant's first evaluation seeds (the learning curve).
-- ``Results``: a run of the pipeline: the recipe (as JSON), the command, when, how long, its rows and curve.
+- ``Sitting``: a later run that added training seeds to a shipped baseline (``colorsort-baseline --add-to``).
+- ``Results``: a run of the pipeline: the recipe (as JSON), the command, when, how long, its rows and curve, and
+  the sittings that added seeds to it.
 
 Each record's ``to_json`` writes the flat objects ``scores.json`` has always held, and ``from_json`` reads them,
 those of baselines shipped before the records included.
@@ -120,8 +122,27 @@ class ScoreRow:
 
 
 @dataclass(frozen=True)
+class Sitting:
+    """A run of the pipeline on another machine or day that added training seeds to a shipped baseline."""
+
+    command: str
+    commit: str  # the checkout's (``ship.commit``)
+    started: str  # "2026-12-01 14:26 UTC"
+    wall_s: float  # [s] the run's wall time
+    seeds: tuple[int, ...]  # lerobot-train's seeds it added
+
+    def to_json(self) -> dict:
+        return {**asdict(self), "seeds": list(self.seeds)}
+
+    @classmethod
+    def from_json(cls, data: dict) -> Sitting:
+        return cls(data["command"], data["commit"], data["started"], data["wall_s"], tuple(data["seeds"]))
+
+
+@dataclass(frozen=True)
 class Results:
-    """One run of the pipeline (``results.json``; shipped as ``scores.json``)."""
+    """One run of the pipeline (``results.json``; shipped as ``scores.json``), with the sittings that added
+    training seeds to it (``added``: their rows are in ``rows``; the curve stays the first seed's)."""
 
     recipe: dict  # Recipe.to_json(), or a shipped baseline's flat recipe of before the sections
     command: str
@@ -129,16 +150,29 @@ class Results:
     wall_s: float
     rows: tuple[ScoreRow, ...]
     curve: tuple[CurvePoint, ...] = ()
+    commit: str = ""  # the checkout's at shipping (``ship.commit``); "" in results.json and older scores
+    added: tuple[Sitting, ...] = ()
+
+    @property
+    def seeds(self) -> tuple[int, ...]:
+        """lerobot-train's seeds of the rows, in the order they were run."""
+        return tuple(dict.fromkeys(r.seed for r in self.rows))
 
     def to_json(self) -> dict:
-        return {"recipe": self.recipe, "command": self.command, "started": self.started, "wall_s": self.wall_s,
-                "rows": [r.to_json() for r in self.rows], "curve": [p.to_json() for p in self.curve]}
+        out = {"recipe": self.recipe, "command": self.command, "started": self.started, "wall_s": self.wall_s,
+               "rows": [r.to_json() for r in self.rows], "curve": [p.to_json() for p in self.curve]}
+        if self.commit:
+            out["commit"] = self.commit
+        if self.added:
+            out["added"] = [s.to_json() for s in self.added]
+        return out
 
     @classmethod
     def from_json(cls, data: dict) -> Results:
         return cls(data["recipe"], data["command"], data["started"], data["wall_s"],
                    tuple(ScoreRow.from_json(r) for r in data["rows"]),
-                   tuple(CurvePoint.from_json(p) for p in data.get("curve") or ()))
+                   tuple(CurvePoint.from_json(p) for p in data.get("curve") or ()), data.get("commit", ""),
+                   tuple(Sitting.from_json(s) for s in data.get("added", ())))
 
     @classmethod
     def load(cls, path: Path) -> Results:

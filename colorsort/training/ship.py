@@ -1,17 +1,24 @@
-"""Shipping a trained policy: LeRobot's ``pretrained_model`` files, its scores as JSON, plots and a README."""
+"""Shipping a trained policy: LeRobot's ``pretrained_model`` files, its scores as JSON, plots and a README.
+
+``ship`` makes a baseline's folder; ``add_seeds`` adds the rows of training seeds run later (another sitting,
+another machine: the same recipe but its seeds, so the same demos) to a folder shipped before, leaving its
+policy, the first seed's, as it was."""
 
 from __future__ import annotations
 
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
+from dataclasses import replace
 from pathlib import Path
 
+from colorsort.errors import ConfigError
 from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
-from colorsort.training.records import Results
-from colorsort.training.report import curve_table, summary_table, table, validation_table
+from colorsort.training.records import Results, Sitting
+from colorsort.training.report import curve_table, plot_demos, summary_table, table, validation_table
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
 
 
@@ -73,11 +80,78 @@ def ship(recipe: Recipe, model: Path, results: Results, plots: list[Path], dest:
         shutil.copy2(f, dest / f.name)
     for p in plots:
         shutil.copy2(p, dest / p.name)
+    results = replace(results, command=command, commit=commit(dest))
     (dest / "scores.json").write_text(json.dumps(results.to_json(), indent=1))
+    write_readme(recipe, results, dest)
+    print(f"shipped {dest} ({sum(f.stat().st_size for f in dest.iterdir()) / 1e6:.1f} MB)")
+
+
+def differences(stored: object, recipe: object, prefix: str = "") -> list[str]:
+    """The ``section.field`` keys where two recipes' JSON differ."""
+    if not (isinstance(stored, dict) and isinstance(recipe, dict)):
+        return [] if stored == recipe else [prefix.rstrip(".")]
+    return [k for key in sorted(set(stored) | set(recipe))
+            for k in differences(stored.get(key), recipe.get(key), f"{prefix}{key}.")]
+
+
+def addable(recipe: Recipe, dest: Path) -> Results:
+    """The scores shipped in ``dest``, when ``recipe`` differs from theirs only in training seeds none of theirs;
+    ConfigError saying what differs otherwise."""
+    path = dest / "scores.json"
+    if not path.is_file():
+        raise ConfigError(f"{dest} holds no shipped baseline (no scores.json): ship one there first with --ship")
+    shipped = Results.load(path)
+    ours, theirs = recipe.to_json(), json.loads(json.dumps(shipped.recipe))
+    for stored in (ours, theirs):
+        if isinstance(stored.get("training"), dict):
+            stored["training"].pop("seeds", None)
+    differ = differences(theirs, ours)
+    if differ:
+        raise ConfigError(f"{dest}'s recipe differs from this run's in {differ}: seeds can be added only to a "
+                          "baseline of the same recipe (give those settings as it was made, see its README)")
+    again = sorted(set(recipe.training.seeds) & set(shipped.seeds))
+    if again:
+        raise ConfigError(f"{dest} already holds training seeds {again}: give --training.seeds other than "
+                          f"{list(shipped.seeds)}")
+    return shipped
+
+
+def add_seeds(recipe: Recipe, results: Results, dest: Path, command: str) -> Results:
+    """Add ``results``' rows (training seeds run in a later sitting of ``recipe``) to the baseline shipped in
+    ``dest``: its scores, its plot against demos and its README; its policy, curve and first command stay. The
+    merged scores."""
+    shipped = addable(recipe, dest)
+    seeds = shipped.seeds + recipe.training.seeds
+    merged_recipe = recipe.override({"training.seeds": seeds})
+    sitting = Sitting(command, commit(dest), results.started, results.wall_s, recipe.training.seeds)
+    merged = replace(shipped, recipe=merged_recipe.to_json(), rows=shipped.rows + results.rows,
+                     commit=made_by(shipped, dest), added=shipped.added + (sitting,))
+    (dest / "scores.json").write_text(json.dumps(merged.to_json(), indent=1))
+    main = recipe.evaluation.main_variant
+    plot_demos([r for r in merged.rows if r.variant == main], recipe.label, main, dest / "success_vs_demos.png")
+    write_readme(merged_recipe, merged, dest)
+    print(f"added training seeds {list(recipe.training.seeds)} to {dest} (now {list(seeds)})")
+    return merged
+
+
+def made_by(results: Results, dest: Path) -> str:
+    """Where the first command ran: "on commit <sha>"; for scores shipped before they held it, the commit their
+    README names."""
+    if results.commit:
+        return results.commit
+    readme = dest / "README.md"
+    text = readme.read_text() if readme.is_file() else ""
+    found = re.search(r"on commit (\S+(?: \(with uncommitted changes\))?)", text)
+    return found[1].rstrip(",") if found else "unknown"
+
+
+def write_readme(recipe: Recipe, results: Results, dest: Path) -> None:
+    """``dest/README.md``: how the policy in ``dest`` was made and scored, from ``results`` (its rows' first
+    training seed is the policy's)."""
     demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
     every_seed = [r for r in results.rows if r.demos_tried == demos.counts[-1]]
     largest = [r for r in every_seed if r.seed == training.seeds[0]]
-    size_mb = sum(f.stat().st_size for f in dest.iterdir()) / 1e6
+    size_mb = sum(f.stat().st_size for f in dest.iterdir() if f.name != "README.md") / 1e6
     inputs = (f"`observation.state` and the cameras {', '.join(demos.cameras)} at {demos.image_size} px, never "
               "`observation.environment_state`: the policy sees the boxes" if demos.cameras else
               "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
@@ -106,17 +180,21 @@ def ship(recipe: Recipe, model: Path, results: Results, plots: list[Path], dest:
     at = f" (shipped: its checkpoint after {largest[0].checkpoint})" if largest[0].checkpoint is not None else ""
     cameras = ",".join(demos.cameras) or "none"
     dagger = dagger_line(recipe, largest[0].frames)
+    added = "".join(f" Training seed{'s' * (len(s.seeds) > 1)} {', '.join(map(str, s.seeds))} added later by "
+                    f"`{s.command}` on commit {s.commit}, started {s.started} ({s.wall_s / 60:.0f} min)."
+                    for s in results.added)
     task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
+    sha = results.commit or "unknown"
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
 
 {recipe.policy.describe(parameters(dest))}{backbone}, on {inputs}.
 {size_mb:.1f} MB.
 
-Made by `{command}` (recipe `{recipe.name}`) on commit {commit(dest)}, started {results.started}, on
+Made by `{results.command}` (recipe `{recipe.name}`) on commit {sha}, started {results.started}, on
 {machine(training.device)}: {demos.counts[-1]} expert demos tried ({demo_line(recipe)}),
 {largest[0].demos} kept, {largest[0].steps} updates at batch {training.batch_size} in
 {largest[0].train_minutes:.0f} min of `lerobot-train`{at}.{dagger} Stages reused from earlier runs of the same command
-count with the time they took then.
+count with the time they took then.{added}
 
 Run it:
 
@@ -131,5 +209,3 @@ Scores (`colorsort-eval`, each variant's fixed evaluation seeds; `scores.json` h
 
 {table(largest, recipe.label)}
 {seeds}{chosen}{curve}""")
-    print(f"shipped {dest} ({size_mb:.1f} MB)")
-

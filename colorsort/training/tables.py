@@ -163,6 +163,12 @@ def variant_cell(variant: str, rows: Sequence[ScoreRow]) -> str:
             f"({len(rows)} x {rows[0].report.episodes})")
 
 
+def commands(scores: Results) -> str:
+    """The commands that made a baseline's scores: the first, then each that added training seeds."""
+    return "; ".join([scores.command, *(f"seed{'s' * (len(s.seeds) > 1)} {', '.join(map(str, s.seeds))} added by "
+                                        f"{s.command}" for s in scores.added)])
+
+
 def fill(text: str, root: Path, page: Path | None = None) -> str:
     """``text`` (of ``page``, default ``root/README.md``: links are relative to it) with every scores block
     rewritten from ``root/<dir>/scores.json``."""
@@ -176,7 +182,7 @@ def fill(text: str, root: Path, page: Path | None = None) -> str:
         if not path.is_file():
             raise ConfigError(f"a scores block names {m['dir']}, which has no scores.json")
         scores = Results.load(path)
-        note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/scores.json` ({scores.command}):"
+        note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/scores.json` ({commands(scores)}):"
         return f"{m[1]}{note}\n\n{render(scores, m['kind'])}\n\n{m[5]}"
 
     return BLOCK.sub(block, text)
