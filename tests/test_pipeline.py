@@ -457,34 +457,30 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
             "steps": 2, "policy": {"n_action_steps": 1, "temporal_ensemble_coeff": 0.2}}
 
 
-def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluation_seeds(tmp_path, monkeypatch):
-    """A recipe with select_episodes plays every checkpoint of each seed's run on the validation seeds of each
-    training variant; the one with the most successes there (ties: most boxes right, then the later) is scored on
-    the evaluation seeds, shipped, marked in the tables, and its point on the learning curve is its full score's."""
-    from colorsort.training import pipeline, ship, stages
-    from colorsort.variants import EVAL_SEEDS, VALIDATION_SEEDS
+def fake_stages(monkeypatch, successes, minutes_each) -> list[tuple[str, str, int | None, str]]:
+    """The pipeline's stages faked: 4 demos of 400 frames, runs of one checkpoint an update (``fake_run``, each
+    update ``minutes_each(seed)`` long), every evaluation ``successes(seed, step, validating)`` successes of 2
+    episodes on validation seeds, of all asked for otherwise. The evaluations run, as (checkpoint folder, variant,
+    first validation seed or None, stage folder), filled as the pipeline runs."""
+    from colorsort.training import ship
 
-    assert not set(VALIDATION_SEEDS) & set(EVAL_SEEDS)
-    validation = {  # successes on the validation seeds, per (seed, update): seed 1000 peaks at 2, 1001 ties 2 and 3
-        (1000, 1): 1, (1000, 2): 4, (1000, 3): 2, (1001, 1): 0, (1001, 2): 3, (1001, 3): 3}
-    evaluated: list[tuple[str, str, int | None]] = []
+    evaluated: list[tuple[str, str, int | None, str]] = []
 
     def fake_evaluate(recipe, model, variant, episodes, stem, envs, log_dir, first_seed=None):
         step = int(Path(model).parent.name) if Path(model).parent.name.isdigit() else 3
         seed = int(str(model).split("-seed")[1][:4])
-        evaluated.append((Path(model).parent.name, variant, first_seed))
-        successes = validation[seed, step] // 2 if first_seed is not None else step
-        episodes_run = 2 if first_seed is not None else episodes
-        return {"policy": str(model), "variant": variant, "episodes": episodes_run, "successes": successes,
-                "success_rate": successes / episodes_run, "success_ci95": [0.0, 1.0], "correct": 3 * successes,
-                "misplaced": 0, "dropped": 0, "distractors": 0, "distractors_let_through": 0,
-                "boxes_per_minute": 1.0, "mean_cycle_time_s": 2.0,
-                "per_episode": [{"success": k < successes, "correct": 3 * (k < successes), "misplaced": 0,
-                                 "dropped": 0} for k in range(episodes_run)]}
+        evaluated.append((Path(model).parent.name, variant, first_seed, stem.parent.name))
+        won = successes(seed, step, first_seed is not None)
+        n = 2 if first_seed is not None else episodes
+        return {"policy": str(model), "variant": variant, "episodes": n, "successes": won,
+                "success_rate": won / n, "success_ci95": [0.0, 1.0], "correct": 3 * won, "misplaced": 0,
+                "dropped": 0, "distractors": 0, "distractors_let_through": 0, "boxes_per_minute": 1.0,
+                "mean_cycle_time_s": 2.0, "per_episode": [{"success": k < won, "correct": 3 * (k < won),
+                                                           "misplaced": 0, "dropped": 0} for k in range(n)]}
 
     def fake_train(recipe, data, steps, seed, out):
         run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
-        fake_run(run_dir, steps, None, started=1e9, seconds_each=60)
+        fake_run(run_dir, steps, None, started=1e9, seconds_each=minutes_each(seed))
         return run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
 
     monkeypatch.setattr(stages, "collect", lambda recipe, n, out, workers: out / "data" / f"demos-{n}")
@@ -492,6 +488,21 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
     monkeypatch.setattr(stages, "train", fake_train)
     monkeypatch.setattr(stages, "evaluate", fake_evaluate)
     monkeypatch.setattr(ship, "parameters", lambda model: 1000)  # the fake runs' weights are text
+    return evaluated
+
+
+def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluation_seeds(tmp_path, monkeypatch):
+    """A recipe with select_episodes plays every checkpoint of each seed's run on the validation seeds of each
+    training variant; the one with the most successes there (ties: most boxes right, then the later) is scored on
+    the evaluation seeds, shipped, marked in the tables, and its point on the learning curve is its full score's."""
+    from colorsort.training import pipeline
+    from colorsort.variants import EVAL_SEEDS, VALIDATION_SEEDS
+
+    assert not set(VALIDATION_SEEDS) & set(EVAL_SEEDS)
+    validation = {  # successes on the validation seeds, per (seed, update): seed 1000 peaks at 2, 1001 ties 2 and 3
+        (1000, 1): 1, (1000, 2): 4, (1000, 3): 2, (1001, 1): 0, (1001, 2): 3, (1001, 3): 3}
+    evaluated = fake_stages(monkeypatch, lambda seed, step, validating: validation[seed, step] // 2 if validating
+                            else step, lambda seed: 60)
     recipe = get_recipe("state-tracking", {
         "demos.counts": (4,), "training.steps": 3, "training.save_every": 1, "evaluation.select_episodes": 2,
         "training.seeds": (1000, 1001), "evaluation.variants": ("tracking", "tracking-jitter"),
@@ -500,7 +511,7 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
     results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / "out", envs=1), "cmd", ship_to)
 
     first = VALIDATION_SEEDS[0]
-    chose = [e for e in evaluated if e[2] is not None]
+    chose = [e[:3] for e in evaluated if e[2] is not None]
     assert chose == [(f"{s:06d}", v, first) for _ in (1000, 1001) for s in (1, 2, 3)
                      for v in ("tracking", "tracking-jitter")]
     scored = [(e[0], e[1]) for e in evaluated if e[2] is None]
@@ -524,33 +535,12 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     """``--add-to DIR`` adds a later run's training seeds (the same recipe and flags, other seeds) to the baseline
     shipped in DIR: its scores, tables and README gain their rows and the sitting, its policy and learning curve stay
     the first seed's; another recipe, a seed it holds, no baseline there, or --ship beside it: exit 2, nothing run."""
-    from colorsort.training import ship, tables
+    from colorsort.training import tables
     from colorsort.training.records import Results
 
-    evaluated: list[str] = []
-
-    def fake_evaluate(recipe, model, variant, episodes, stem, envs, log_dir, first_seed=None):
-        step = int(Path(model).parent.name) if Path(model).parent.name.isdigit() else 3
-        seed = int(str(model).split("-seed")[1][:4])
-        evaluated.append(stem.parent.name)
-        successes = {(1000, 2): 2, (1001, 3): 2}.get((seed, step), 0) if first_seed is not None else seed - 999
-        n = 2 if first_seed is not None else episodes
-        return {"policy": str(model), "variant": variant, "episodes": n, "successes": successes,
-                "success_rate": successes / n, "success_ci95": [0.0, 1.0], "correct": 3 * successes, "misplaced": 0,
-                "dropped": 0, "distractors": 0, "distractors_let_through": 0, "boxes_per_minute": 1.0,
-                "mean_cycle_time_s": 2.0, "per_episode": [{"success": k < successes, "correct": 3 * (k < successes),
-                                                           "misplaced": 0, "dropped": 0} for k in range(n)]}
-
-    def fake_train(recipe, data, steps, seed, out):
-        run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
-        fake_run(run_dir, steps, None, started=1e9, seconds_each=60 * (seed - 999))
-        return run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
-
-    monkeypatch.setattr(stages, "collect", lambda recipe, n, out, workers: out / "data" / f"demos-{n}")
-    monkeypatch.setattr(stages, "size", lambda data: (4, 400))
-    monkeypatch.setattr(stages, "train", fake_train)
-    monkeypatch.setattr(stages, "evaluate", fake_evaluate)
-    monkeypatch.setattr(ship, "parameters", lambda model: 1000)  # the fake runs' weights are text
+    best = {(1000, 2): 2, (1001, 3): 2}  # successes on the validation seeds, per (seed, update); else 0
+    evaluated = fake_stages(monkeypatch, lambda seed, step, validating: best.get((seed, step), 0) if validating
+                            else seed - 999, lambda seed: 60 * (seed - 999))
     flags = ["--recipe", "state-tracking", "--demos.counts=4", "--training.steps=3", "--training.save_every=1",
              "--evaluation.select_episodes=2", "--evaluation.variants=tracking,tracking-jitter",
              "--evaluation.episodes=4", "--evaluation.other_episodes=4", "--evaluation.curve_episodes=4"]
@@ -574,7 +564,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     evaluated.clear()
     status, printed = baseline_main(later + ["--add-to", str(shipped)], capsys)
     assert status == 0 and "added training seeds [1001] to" in printed
-    assert "curve" not in evaluated  # the baseline's curve is its first seed's
+    assert "curve" not in [e[3] for e in evaluated]  # the baseline's curve is its first seed's
     after = Results.load(shipped / "scores.json")
     assert after.seeds == (1000, 1001) and after.recipe["training"]["seeds"] == [1000, 1001]
     assert after.rows[:2] == before.rows and [(r.seed, r.checkpoint) for r in after.rows[2:]] == [(1001, 3)] * 2
