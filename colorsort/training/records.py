@@ -131,6 +131,10 @@ class Sitting:
     wall_s: float  # [s] the run's wall time
     seeds: tuple[int, ...]  # lerobot-train's seeds it added
 
+    def named_seeds(self) -> str:
+        """"seed 1000", "seeds 1000, 1002"."""
+        return f"seed{'s' * (len(self.seeds) > 1)} {', '.join(map(str, self.seeds))}"
+
     def to_json(self) -> dict:
         return {**asdict(self), "seeds": list(self.seeds)}
 
@@ -150,7 +154,7 @@ class Results:
     wall_s: float
     rows: tuple[ScoreRow, ...]
     curve: tuple[CurvePoint, ...] = ()
-    commit: str = ""  # the checkout's at shipping (``ship.commit``); "" in results.json and older scores
+    commit: str = ""  # the checkout's at shipping (``ship.commit``); "" in results.json
     added: tuple[Sitting, ...] = ()
 
     @property

@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 import shutil
 import subprocess
 from dataclasses import replace
@@ -94,6 +93,14 @@ def differences(stored: object, recipe: object, prefix: str = "") -> list[str]:
             for k in differences(stored.get(key), recipe.get(key), f"{prefix}{key}.")]
 
 
+def seedless(recipe: dict) -> dict:
+    """A stored recipe without its training seeds."""
+    training = recipe.get("training")
+    if not isinstance(training, dict):  # stored flat, before the sections
+        return recipe
+    return {**recipe, "training": {k: v for k, v in training.items() if k != "seeds"}}
+
+
 def addable(recipe: Recipe, dest: Path) -> Results:
     """The scores shipped in ``dest``, when ``recipe`` differs from theirs only in training seeds none of theirs;
     ConfigError saying what differs otherwise."""
@@ -101,11 +108,7 @@ def addable(recipe: Recipe, dest: Path) -> Results:
     if not path.is_file():
         raise ConfigError(f"{dest} holds no shipped baseline (no scores.json): ship one there first with --ship")
     shipped = Results.load(path)
-    ours, theirs = recipe.to_json(), json.loads(json.dumps(shipped.recipe))
-    for stored in (ours, theirs):
-        if isinstance(stored.get("training"), dict):
-            stored["training"].pop("seeds", None)
-    differ = differences(theirs, ours)
+    differ = differences(seedless(shipped.recipe), seedless(recipe.to_json()))
     if differ:
         raise ConfigError(f"{dest}'s recipe differs from this run's in {differ}: seeds can be added only to a "
                           "baseline of the same recipe (give those settings as it was made, see its README)")
@@ -125,24 +128,13 @@ def add_seeds(recipe: Recipe, results: Results, dest: Path, command: str) -> Res
     merged_recipe = recipe.override({"training.seeds": seeds})
     sitting = Sitting(command, commit(dest), results.started, results.wall_s, recipe.training.seeds)
     merged = replace(shipped, recipe=merged_recipe.to_json(), rows=shipped.rows + results.rows,
-                     commit=made_by(shipped, dest), added=shipped.added + (sitting,))
+                     added=shipped.added + (sitting,))
     (dest / "scores.json").write_text(json.dumps(merged.to_json(), indent=1))
     main = recipe.evaluation.main_variant
     plot_demos([r for r in merged.rows if r.variant == main], recipe.label, main, dest / "success_vs_demos.png")
     write_readme(merged_recipe, merged, dest)
     print(f"added training seeds {list(recipe.training.seeds)} to {dest} (now {list(seeds)})")
     return merged
-
-
-def made_by(results: Results, dest: Path) -> str:
-    """Where the first command ran: "on commit <sha>"; for scores shipped before they held it, the commit their
-    README names."""
-    if results.commit:
-        return results.commit
-    readme = dest / "README.md"
-    text = readme.read_text() if readme.is_file() else ""
-    found = re.search(r"on commit (\S+(?: \(with uncommitted changes\))?)", text)
-    return found[1].rstrip(",") if found else "unknown"
 
 
 def write_readme(recipe: Recipe, results: Results, dest: Path) -> None:
@@ -180,9 +172,8 @@ def write_readme(recipe: Recipe, results: Results, dest: Path) -> None:
     at = f" (shipped: its checkpoint after {largest[0].checkpoint})" if largest[0].checkpoint is not None else ""
     cameras = ",".join(demos.cameras) or "none"
     dagger = dagger_line(recipe, largest[0].frames)
-    added = "".join(f" Training seed{'s' * (len(s.seeds) > 1)} {', '.join(map(str, s.seeds))} added later by "
-                    f"`{s.command}` on commit {s.commit}, started {s.started} ({s.wall_s / 60:.0f} min)."
-                    for s in results.added)
+    added = "".join(f" Training {s.named_seeds()} added later by `{s.command}` on commit {s.commit}, started "
+                    f"{s.started} ({s.wall_s / 60:.0f} min)." for s in results.added)
     task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
     sha = results.commit or "unknown"
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}

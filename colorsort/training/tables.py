@@ -165,8 +165,7 @@ def variant_cell(variant: str, rows: Sequence[ScoreRow]) -> str:
 
 def commands(scores: Results) -> str:
     """The commands that made a baseline's scores: the first, then each that added training seeds."""
-    return "; ".join([scores.command, *(f"seed{'s' * (len(s.seeds) > 1)} {', '.join(map(str, s.seeds))} added by "
-                                        f"{s.command}" for s in scores.added)])
+    return "; ".join([scores.command, *(f"{s.named_seeds()} added by {s.command}" for s in scores.added)])
 
 
 def fill(text: str, root: Path, page: Path | None = None) -> str:
