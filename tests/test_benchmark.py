@@ -250,7 +250,8 @@ def test_outcomes_by_lights_bands_episodes_by_the_lights_their_cameras_saw(tmp_p
 
 
 def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
-    """With grips recorded, boxes never picked are left out of the grip bands; |grip yaw| either way."""
+    """With grips recorded, boxes never picked are left out of the grip bands and counted among the drops; |grip yaw|
+    either way."""
     boxes = [{"outcome": "placed", "offset": 0.0, "yaw": 0.0, "grip_offset": 0.002, "grip_yaw": 1.0},
              {"outcome": "misplaced", "offset": 0.04, "yaw": 30.0, "grip_offset": 0.026, "grip_yaw": -22.0},
              {"outcome": "misplaced", "offset": 0.01, "yaw": 10.0, "grip_offset": 0.012, "grip_yaw": 8.0},
@@ -259,6 +260,7 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
     out = console_script("colorsort-analyze", ["by-pose", "eval.json"], tmp_path)
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
+    assert "1 dropped: 1 never picked, 0 lost after the cup picked them" in lines
     assert ("how the cup held the 3 boxes it picked: gripped off axis median 12.0 mm, 90th percentile 26.0 mm; "
             "gripped turned median 8.0 deg, 90th percentile 22.0 deg") in lines
     assert lines[-7:] == ["| gripped off axis 0 to 5 mm | 1 | 0 (0%) | 0 |",

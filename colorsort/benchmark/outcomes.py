@@ -3,8 +3,9 @@ policy places its first box than another (``colorsort-analyze``).
 
 - ``pose_report``: per band of |yaw| and of the offset from the belt's centre line (each box's ``yaw`` [deg] and
   ``offset`` [m]), how many boxes there were and how many went into a wrong bin or were dropped; where the files
-  have how the cup held each box (``grip_offset`` [m] off the cup's axis, ``grip_yaw`` [deg]), the same per band
-  of those over the boxes picked, with the median and 90th percentile of each.
+  have how the cup held each box (``grip_offset`` [m] off the cup's axis, ``grip_yaw`` [deg]), how many of the
+  dropped boxes were never picked, and the same bands of those over the boxes picked, with the median and 90th
+  percentile of each.
 - ``lights_report``: per band of brightness, the ``lighting`` episodes under it (each episode's lights replayed from
   its seed, ``Variant.lighting``, without rendering), their successes, wrong bins and drops; ``demo_brightness``:
   the brightness each episode of a ``colorsort-collect`` dataset was recorded under.
@@ -64,6 +65,11 @@ def pose_report(evaluations: list[dict]) -> list[str]:
     lines = [f"{len(boxes)} boxes", *HEADER,
              *bands(boxes, "turned", YAW_BANDS, 1, "deg"), *bands(boxes, "offset", OFFSET_BANDS, 100, "cm")]
     picked = [b for b in boxes if b.get("grip_offset") is not None]
+    if "grip_offset" in boxes[0]:  # files that record grips tell a box never picked from one lost after a seal
+        dropped = [b for b in boxes if b["outcome"] == "dropped"]
+        never = sum(b["grip_offset"] is None for b in dropped)
+        lines += ["", f"{len(dropped)} dropped: {never} never picked, {len(dropped) - never} lost after the cup "
+                      "picked them"]
     if picked:
         for b in picked:
             b["gripped off axis"], b["gripped turned"] = b["grip_offset"], abs(b["grip_yaw"])
