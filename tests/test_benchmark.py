@@ -270,5 +270,9 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
                           "| gripped turned 0 to 5 deg | 1 | 0 (0%) | 0 |",
                           "| gripped turned 5 to 15 deg | 1 | 1 (100%) | 0 |",
                           "| gripped turned 15 to 45 deg | 1 | 1 (100%) | 0 |"]
+    lost = [*boxes, {"outcome": "dropped", "offset": 0.0, "yaw": 0.0, "grip_offset": 0.004, "grip_yaw": 2.0}]
+    (tmp_path / "lost.json").write_text(json.dumps({"per_episode": [{"boxes": lost}]}))
+    out = console_script("colorsort-analyze", ["by-pose", "lost.json"], tmp_path)
+    assert "2 dropped: 1 never picked, 1 lost after the cup picked them" in out.stdout.splitlines()
 
 
