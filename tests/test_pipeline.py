@@ -246,8 +246,10 @@ def test_a_dagger_round_adds_the_experts_labels_of_the_policys_states_and_trains
     assert row["frames"] == root[merged].num_frames and results["recipe"]["dagger"]["rounds"] == 1
     walls = [json.loads(run.with_name(run.name + ".json").read_text())["wall_s"] for run in (first[0], second[0])]
     assert row["train_minutes"] == pytest.approx(sum(walls) / 60, abs=0.01)  # both rounds' training
-    # the last checkpoint's minutes are both trainings' (the first round counts behind it), rounded to 0.1 min
-    assert results["curve"][-1]["minutes"] == pytest.approx((walls[0] + walls[1]) / 60, abs=0.051)
+    # the last checkpoint's minutes: the first round's training, then the second's up to that save (0.1 min rounding)
+    started = json.loads(second[0].with_name(second[0].name + ".json").read_text())["started"]
+    saved = (second[0] / "checkpoints" / "last" / "training_state" / "training_step.json").stat().st_mtime
+    assert results["curve"][-1]["minutes"] == pytest.approx((walls[0] + saved - started) / 60, abs=0.051)
     assert list((out / "eval").glob(f"{second[0].name}-*-default-*.json"))  # the second policy is scored
     assert f"| default | {get_recipe('camera', {'dagger.rounds': 1}).label} | 1 |" in printed
 

@@ -64,9 +64,9 @@ def pose_report(evaluations: list[dict]) -> list[str]:
         b["turned"] = abs(b["yaw"])
     lines = [f"{len(boxes)} boxes", *HEADER,
              *bands(boxes, "turned", YAW_BANDS, 1, "deg"), *bands(boxes, "offset", OFFSET_BANDS, 100, "cm")]
-    if "grip_offset" in boxes[0]:  # files that record grips tell a box never picked from one lost after a seal
+    if any("grip_offset" in b for b in boxes):  # grips recorded: a box never picked or one lost after a seal
         dropped = [b for b in boxes if b["outcome"] == "dropped"]
-        never = sum(b["grip_offset"] is None for b in dropped)
+        never = sum(b.get("grip_offset") is None for b in dropped)
         lines += ["", f"{len(dropped)} dropped: {never} never picked, {len(dropped) - never} lost after the cup "
                       "picked them"]
     picked = [b for b in boxes if b.get("grip_offset") is not None]
