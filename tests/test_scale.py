@@ -161,35 +161,45 @@ def test_the_docs_collection_on_ray_works_as_written(cluster, tmp_path, monkeypa
     assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]
 
 
-def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster, reference, tmp_path, capsys):
+def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster, reference, tmp_path, capsys,
+                                                                           monkeypatch):
     """Ctrl-C (SIGINT to this process, Python's own handler) to colorsort-collect whose tasks run on Ray: every
     finished episode is kept and it says so; --resume on the same cluster completes the dataset. (Local processes:
-    test_collect's interrupted runs.) One shard of 8 episodes on one Ray worker: the interrupt comes when the first
-    is saved, 7 to go. A loaded 2-core machine once took so long to deliver the cancel that a shard of 4 (3 to go)
-    finished before it did (a cancel has taken 40 s to reach a task there). On a machine loaded enough that even 7
-    episodes end first (once, CI's tests beside a training run), the run is complete and exits 0 as it should:
-    the test checks that and is skipped, for there is nothing to resume."""
+    test_collect's interrupted runs.) One shard of 8 episodes on one Ray worker: the interrupt comes once the
+    driver hears that the first episode is saved, 7 to go. (It used to come when a file LeRobot writes at the start
+    of that save appeared, or after 300 s: a loaded machine got there with nothing yet kept.) A loaded 2-core
+    machine once took so long to deliver the cancel that a shard of 4 (3 to go) finished before it did (a cancel
+    has taken 40 s to reach a task there). On a machine loaded enough that even 7 episodes end first, the run is
+    complete and exits 0 as it should: the test checks that and is skipped, for there is nothing to resume."""
     from colorsort.cli.collect import main
+    from colorsort.data import collect as collect_module
 
     out = tmp_path / "ds"
     argv = ["--out", str(out), "--episodes", "8", "--boxes-per-episode", "2", "--cameras", "none", "--shard-size", "8",
             "--workers", "1", "--executor", "ray"]
-    staging = tmp_path / ".ds.staging"
+    first_saved = threading.Event()
+    on_episode = collect_module._Progress.on_episode
 
-    def ctrl_c():  # LeRobot writes tasks.parquet when a shard saves its first episode
-        deadline = time.monotonic() + 300
-        while not list(staging.glob("shard-*/meta/tasks.parquet")) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        os.kill(os.getpid(), signal.SIGINT)
+    def heard(self, result):  # the task reports an episode once its save is complete
+        on_episode(self, result)
+        if result.kept:
+            first_saved.set()
+
+    monkeypatch.setattr(collect_module._Progress, "on_episode", heard)
+
+    def ctrl_c():
+        if first_saved.wait(timeout=900):
+            os.kill(os.getpid(), signal.SIGINT)
 
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal, even in a background job
     try:
         watcher = threading.Thread(target=ctrl_c, daemon=True)
         watcher.start()
         status = main(argv)
-        watcher.join()
+        watcher.join(timeout=1)
     finally:
         signal.signal(signal.SIGINT, previous)
+    assert first_saved.is_set(), "the driver never heard of a saved episode"
     if status == 0:  # nothing was left when the cancel reached the task: the run is done, and says so
         assert sorted(json.loads((out / MARKER).read_text())["episodes"]) == list(range(8))
         same_episodes(out, reference, only=range(4))
