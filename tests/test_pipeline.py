@@ -534,6 +534,57 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
         get_recipe("camera-tracking", {"evaluation.select_episodes": len(VALIDATION_SEEDS) + 1})
 
 
+def test_a_dagger_round_rolls_out_the_last_checkpoint_or_the_one_validation_chooses(tmp_path, monkeypatch):
+    """dagger.rollout="last" (the default) has the round's takeover driven by the first training's last checkpoint;
+    "chosen" by the checkpoint its validation seeds choose, named in the labels' cache key; the retrained policy is
+    chosen and scored as ever. "chosen" without validation episodes: ValueError naming both settings."""
+    from colorsort.training import pipeline
+
+    validation = {1: 0, 2: 2, 3: 1}  # the first training peaks at update 2; the retraining at 3
+    evaluated = fake_stages(monkeypatch, lambda seed, step, validating: validation[step] if validating else 4,
+                            lambda seed: 60)
+    drove: list[tuple[str, str, int | None]] = []
+
+    def fake_label(recipe, run_dir, variant, k, round_, out, model=None, step=None):
+        drove.append((run_dir.name, Path(model).parent.name, step))
+        return out / "data" / f"labels-{variant}-r{round_}"
+
+    monkeypatch.setattr(stages, "label", fake_label)
+    monkeypatch.setattr(stages, "add_labels", lambda recipe, data, labels, stem, out: out / "data" / stem)
+    flags = {"demos.counts": (4,), "demos.train_mix": (("tracking", 1),), "training.steps": 3,
+             "training.save_every": 1, "training.seeds": (1000,), "evaluation.select_episodes": 2,
+             "evaluation.variants": ("tracking",), "evaluation.episodes": 4, "evaluation.curve_episodes": 4,
+             "dagger.rounds": 1}
+    for rollout, checkpoint, step in (("last", "last", None), ("chosen", "000002", 2)):
+        drove.clear()
+        recipe = get_recipe("state-tracking", {**flags, "dagger.rollout": rollout})
+        results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / rollout, envs=1), "cmd")
+        assert drove == [("demos-4-3steps-seed1000", checkpoint, step)]
+        assert [(r.seed, r.checkpoint) for r in results.rows] == [(1000, 2)]
+        assert {e[3] for e in evaluated if e[0] == "000002" and e[2] is None} == {"eval"}
+        assert results.recipe["dagger"]["rollout"] == rollout
+        evaluated.clear()
+    with pytest.raises(ValueError, match="rollout='chosen'.*select_episodes"):
+        get_recipe("state-tracking", {**flags, "dagger.rollout": "chosen", "evaluation.select_episodes": 0})
+    with pytest.raises(ValueError, match=r"\['last', 'chosen'\]"):
+        get_recipe("state-tracking", {**flags, "dagger.rollout": "best"})
+
+
+def test_a_baseline_stored_before_a_setting_existed_takes_seeds_of_its_recipe_at_that_settings_default():
+    """act-camera-tracking-dagger's scores.json predates dagger.rollout: a later seed of its own recipe may join it
+    (the setting ran as its default, "last"), and a run with rollout="chosen" may not."""
+    from colorsort.errors import ConfigError
+    from colorsort.training.ship import addable
+
+    shipped = Path(__file__).parents[1] / "baselines" / "act-camera-tracking-dagger"
+    assert "rollout" not in json.loads((shipped / "scores.json").read_text())["recipe"]["dagger"]
+    same = {"training.seeds": (1003,), "evaluation.other_episodes": 50, "dagger.rounds": 1, "dagger.episodes": 24,
+            "dagger.handover": (20, 100)}
+    assert addable(get_recipe("camera-tracking", same), shipped).seeds == (1001, 1000, 1002)
+    with pytest.raises(ConfigError, match=r"\['dagger.rollout'\]"):
+        addable(get_recipe("camera-tracking", {**same, "dagger.rollout": "chosen"}), shipped)
+
+
 def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(tmp_path, monkeypatch, capsys):
     """``--add-to DIR`` adds a later run's training seeds (the same recipe and flags, other seeds) to the baseline
     shipped in DIR: its scores, tables and README gain their rows and the sitting, its policy and learning curve stay

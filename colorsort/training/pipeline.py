@@ -75,7 +75,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             run_dir, timing = stages.train(recipe, data, steps, seed, out)
             trained_frames = frames
             if largest and recipe.dagger.rounds:
-                run_dir, timing, trained_on = dagger(recipe, n, data, run_dir, timing, steps, seed, out)
+                run_dir, timing, trained_on = dagger(recipe, settings, n, data, run_dir, timing, steps, seed)
                 trained_frames = stages.size(trained_on)[1]  # the demos' and the expert's labels
             if settings.until == "train":
                 continue
@@ -118,18 +118,24 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     return results
 
 
-def dagger(recipe: Recipe, n: int, data: Path, run_dir: Path, timing: dict, steps: int, seed: int,
-           out: Path) -> tuple[Path, dict, Path]:
-    """DAgger's rounds after the first training (``recipe.dagger``): each round's policy plays every training
-    variant, the expert labels the states it reached, the labels join the training set and a new policy is trained
-    on it from scratch. The last round's run, its timing and its training set.
+def dagger(recipe: Recipe, settings: RunSettings, n: int, data: Path, run_dir: Path, timing: dict, steps: int,
+           seed: int) -> tuple[Path, dict, Path]:
+    """DAgger's rounds after the first training (``recipe.dagger``): each round's policy (its last checkpoint, or
+    with ``rollout="chosen"`` the one validation seeds choose) plays every training variant, the expert labels the
+    states it reached, the labels join the training set and a new policy is trained on it from scratch. The last
+    round's run, its timing and its training set.
 
     The timing counts every round's training: its wall time is their sum, and its start is moved back by the earlier
     rounds' training, so that a checkpoint's minutes (``stages.checkpoints``) are all the training behind it."""
+    out = settings.out
     earlier_s = 0.0
     for round_ in range(1, recipe.dagger.rounds + 1):
         earlier_s += timing["wall_s"]
-        labels = [stages.label(recipe, run_dir, variant, k, round_, out)
+        model, step = run_dir / "checkpoints" / "last" / "pretrained_model", None
+        if recipe.dagger.rollout == "chosen":
+            model, chosen, _ = choose(recipe, settings, run_dir, timing, steps)
+            step = None if chosen == steps else chosen
+        labels = [stages.label(recipe, run_dir, variant, k, round_, out, model, step)
                   for k, variant in enumerate(recipe.demos.train_variants)]
         data = stages.add_labels(recipe, data, labels, f"demos-{n}-dagger{round_}", out)
         run_dir, timing = stages.train(recipe, data, steps, seed, out)

@@ -205,6 +205,9 @@ class TrainSettings:
                 f"--dataset.image_transforms.tfs={json.dumps(tfs)}"]
 
 
+ROLLOUTS = ("last", "chosen")
+
+
 @dataclass(frozen=True)
 class DaggerSettings:
     """DAgger (Ross et al., 2011) after behaviour cloning: rounds of "the policy drives, the expert labels the
@@ -219,11 +222,15 @@ class DaggerSettings:
             it finishes with every box right are kept).
         handover: [steps] (first, last): the policy acts for a number of steps drawn from this range in each
             episode before the expert takes over.
+        rollout: which checkpoint of a round's policy plays: "last", or "chosen", the one validation seeds
+            choose (``evaluation.select_episodes``) as for scoring; a policy's checkpoints can differ by more
+            than the methods do.
     """
 
     rounds: int = 0
     episodes: int = 10
     handover: tuple[int, int] = (20, 200)
+    rollout: str = "last"
 
     def __post_init__(self) -> None:
         if self.rounds < 0:
@@ -232,6 +239,8 @@ class DaggerSettings:
         lo, hi = self.handover
         if not 0 <= lo <= hi:
             raise ConfigError(f"handover={self.handover}: give FIRST:LAST steps with 0 <= FIRST <= LAST")
+        if self.rollout not in ROLLOUTS:
+            raise ConfigError(f"rollout={self.rollout!r}: give one of {list(ROLLOUTS)}")
 
 
 @dataclass(frozen=True)
@@ -290,6 +299,9 @@ class Recipe:
         if (self.training.image_shift or self.training.image_relight) and not self.demos.cameras:
             raise ConfigError("training.image_shift and training.image_relight change camera images: give "
                               "demos.cameras, or turn them off")
+        if self.dagger.rollout == "chosen" and not self.evaluation.select_episodes:
+            raise ConfigError("dagger.rollout='chosen' plays the checkpoint validation seeds choose, and "
+                              "evaluation.select_episodes=0 chooses none: give select_episodes, or rollout='last'")
         if self.evaluation.select_episodes and not self.training.save_every:
             raise ConfigError(f"evaluation.select_episodes={self.evaluation.select_episodes} chooses among "
                               "checkpoints, and training.save_every=0 saves only the last: give save_every, or "

@@ -11,11 +11,11 @@ import math
 import os
 import shutil
 import subprocess
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
+from colorsort.training.recipes import RELIGHT_TEMPERATURE, DaggerSettings, Recipe
 from colorsort.training.records import Results, Sitting
 from colorsort.training.report import curve_table, plot_demos, summary_table, table, validation_table
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
@@ -101,6 +101,14 @@ def seedless(recipe: dict) -> dict:
     return {**recipe, "training": {k: v for k, v in training.items() if k != "seeds"}}
 
 
+def with_defaults(recipe: dict) -> dict:
+    """A stored recipe with the fields it predates at their defaults: a setting added since ran as its default
+    does (``dagger.rollout``, for one). The policy section is the method's own and is left as stored."""
+    defaults = {**Recipe("defaults").to_json(), "dagger": json.loads(json.dumps(asdict(DaggerSettings())))}
+    return {**recipe, **{section: {**defaults[section], **stored} for section, stored in recipe.items()
+                         if section in ("demos", "training", "dagger", "evaluation") and isinstance(stored, dict)}}
+
+
 def addable(recipe: Recipe, dest: Path) -> Results:
     """The scores shipped in ``dest``, when ``recipe`` differs from theirs only in training seeds none of theirs;
     ConfigError saying what differs otherwise."""
@@ -108,7 +116,7 @@ def addable(recipe: Recipe, dest: Path) -> Results:
     if not path.is_file():
         raise ConfigError(f"{dest} holds no shipped baseline (no scores.json): ship one there first with --ship")
     shipped = Results.load(path)
-    differ = differences(seedless(shipped.recipe), seedless(recipe.to_json()))
+    differ = differences(seedless(with_defaults(shipped.recipe)), seedless(with_defaults(recipe.to_json())))
     if differ:
         raise ConfigError(f"{dest}'s recipe differs from this run's in {differ}: seeds can be added only to a "
                           "baseline of the same recipe (give those settings as it was made, see its README)")
