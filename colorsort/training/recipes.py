@@ -36,6 +36,7 @@ from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
+from colorsort.training.dagger_settings import DaggerSettings, with_dagger
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SNAPSHOT_DIFFUSION, TRACKING_ACT, PolicySettings
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, VARIANTS, get_variant
 
@@ -46,11 +47,6 @@ TRACKING_VARIANTS = ("tracking", "tracking-jitter", "tracking-fast")
 CAMERA_MIX = (("default", 1.0), ("lighting", 1.0), ("jitter", 1.0), ("fast", 1.0), ("distractors", 2.0))
 DEVICES = ("cpu", "cuda", "mps")
 SECTIONS = ("demos", "policy", "training", "dagger", "evaluation")
-
-
-def with_dagger(method: str, rounds: int) -> str:
-    """A method's name in tables, with DAgger's rounds where it ran them: "ACT + DAgger (2 rounds)"."""
-    return f"{method} + DAgger ({rounds} round{'s' * (rounds > 1)})" if rounds else method
 
 
 def _at_least_one(section: object, *names: str) -> None:
@@ -203,44 +199,6 @@ class TrainSettings:
             return []
         return ["--dataset.image_transforms.enable=true", f"--dataset.image_transforms.max_num_transforms={len(tfs)}",
                 f"--dataset.image_transforms.tfs={json.dumps(tfs)}"]
-
-
-ROLLOUTS = ("last", "chosen")
-
-
-@dataclass(frozen=True)
-class DaggerSettings:
-    """DAgger (Ross et al., 2011) after behaviour cloning: rounds of "the policy drives, the expert labels the
-    states it reached, the labels join the training set, the policy is trained again" (``colorsort-takeover``
-    records a round's labels). Each round trains a new policy from scratch on the demos and every round's labels,
-    for the recipe's updates and seeds; the last round's policy is the one scored. Only the largest demo set runs
-    rounds.
-
-    Attributes:
-        rounds: rounds after the first training; 0: behaviour cloning alone.
-        episodes: episodes the policy plays per round on each training variant (the expert finishes each; those
-            it finishes with every box right are kept).
-        handover: [steps] (first, last): the policy acts for a number of steps drawn from this range in each
-            episode before the expert takes over.
-        rollout: which checkpoint of a round's policy plays: "last", or "chosen", the one validation seeds
-            choose (``evaluation.select_episodes``) as for scoring; a policy's checkpoints can differ by more
-            than the methods do.
-    """
-
-    rounds: int = 0
-    episodes: int = 10
-    handover: tuple[int, int] = (20, 200)
-    rollout: str = "last"
-
-    def __post_init__(self) -> None:
-        if self.rounds < 0:
-            raise ConfigError(f"rounds={self.rounds}: give 0 (behaviour cloning alone) or more")
-        _at_least_one(self, "episodes")
-        lo, hi = self.handover
-        if not 0 <= lo <= hi:
-            raise ConfigError(f"handover={self.handover}: give FIRST:LAST steps with 0 <= FIRST <= LAST")
-        if self.rollout not in ROLLOUTS:
-            raise ConfigError(f"rollout={self.rollout!r}: give one of {list(ROLLOUTS)}")
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,8 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training.recipes import RELIGHT_TEMPERATURE, DaggerSettings, Recipe
+from colorsort.training.dagger_settings import DaggerSettings
+from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
 from colorsort.training.records import Results, Sitting
 from colorsort.training.report import curve_table, plot_demos, summary_table, table, validation_table
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant

@@ -30,7 +30,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training.recipes import with_dagger
+from colorsort.training.dagger_settings import with_dagger
 from colorsort.training.records import Results, ScoreRow
 from colorsort.training.report import curve_table, scored_checkpoints, span, summary_table
 
