@@ -543,10 +543,10 @@ def test_a_dagger_round_rolls_out_the_last_checkpoint_or_the_one_validation_choo
     validation = {1: 0, 2: 2, 3: 1}  # the first training peaks at update 2; the retraining at 3
     evaluated = fake_stages(monkeypatch, lambda seed, step, validating: validation[step] if validating else 4,
                             lambda seed: 60)
-    drove: list[tuple[str, str, int | None]] = []
+    drove: list[tuple[str, str, str]] = []
 
-    def fake_label(recipe, run_dir, variant, k, round_, out, model=None, step=None):
-        drove.append((run_dir.name, Path(model).parent.name, step))
+    def fake_label(recipe, model, variant, k, round_, out):
+        drove.append((model.parents[1].parent.name, model.parent.name, stages.checkpoint_name(model)))
         return out / "data" / f"labels-{variant}-r{round_}"
 
     monkeypatch.setattr(stages, "label", fake_label)
@@ -555,11 +555,12 @@ def test_a_dagger_round_rolls_out_the_last_checkpoint_or_the_one_validation_choo
              "training.save_every": 1, "training.seeds": (1000,), "evaluation.select_episodes": 2,
              "evaluation.variants": ("tracking",), "evaluation.episodes": 4, "evaluation.curve_episodes": 4,
              "dagger.rounds": 1}
-    for rollout, checkpoint, step in (("last", "last", None), ("chosen", "000002", 2)):
+    run = "demos-4-3steps-seed1000"
+    for rollout, checkpoint, key in (("last", "last", run), ("chosen", "000002", f"{run}@2")):
         drove.clear()
         recipe = get_recipe("state-tracking", {**flags, "dagger.rollout": rollout})
         results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / rollout, envs=1), "cmd")
-        assert drove == [("demos-4-3steps-seed1000", checkpoint, step)]
+        assert drove == [(run, checkpoint, key)]  # the labels' cache key names the update unless it is the last
         assert [(r.seed, r.checkpoint) for r in results.rows] == [(1000, 2)]
         assert {e[3] for e in evaluated if e[0] == "000002" and e[2] is None} == {"eval"}
         assert results.recipe["dagger"]["rollout"] == rollout

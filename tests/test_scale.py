@@ -166,11 +166,11 @@ def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster
     """Ctrl-C (SIGINT to this process, Python's own handler) to colorsort-collect whose tasks run on Ray: every
     finished episode is kept and it says so; --resume on the same cluster completes the dataset. (Local processes:
     test_collect's interrupted runs.) One shard of 8 episodes on one Ray worker: the interrupt comes once the
-    driver hears that the first episode is saved, 7 to go. (It used to come when a file LeRobot writes at the start
-    of that save appeared, or after 300 s: a loaded machine got there with nothing yet kept.) A loaded 2-core
-    machine once took so long to deliver the cancel that a shard of 4 (3 to go) finished before it did (a cancel
-    has taken 40 s to reach a task there). On a machine loaded enough that even 7 episodes end first, the run is
-    complete and exits 0 as it should: the test checks that and is skipped, for there is nothing to resume."""
+    driver hears that the first episode is saved (not when a file of that save appears: a loaded machine cut in
+    with nothing kept), 7 to go. A loaded 2-core machine once took so long to deliver the cancel that a shard of 4
+    (3 to go) finished before it did (a cancel has taken 40 s to reach a task there). On a machine loaded enough
+    that even 7 episodes end first, the run is complete and exits 0 as it should: the test checks that and is
+    skipped, for there is nothing to resume."""
     from colorsort.cli.collect import main
     from colorsort.data import collect as collect_module
 

@@ -131,11 +131,10 @@ def dagger(recipe: Recipe, settings: RunSettings, n: int, data: Path, run_dir: P
     earlier_s = 0.0
     for round_ in range(1, recipe.dagger.rounds + 1):
         earlier_s += timing["wall_s"]
-        model, step = run_dir / "checkpoints" / "last" / "pretrained_model", None
+        model = run_dir / "checkpoints" / "last" / "pretrained_model"
         if recipe.dagger.rollout == "chosen":
-            model, chosen, _ = choose(recipe, settings, run_dir, timing, steps)
-            step = None if chosen == steps else chosen
-        labels = [stages.label(recipe, run_dir, variant, k, round_, out, model, step)
+            model = choose(recipe, settings, run_dir, timing, steps)[0]
+        labels = [stages.label(recipe, model, variant, k, round_, out)
                   for k, variant in enumerate(recipe.demos.train_variants)]
         data = stages.add_labels(recipe, data, labels, f"demos-{n}-dagger{round_}", out)
         run_dir, timing = stages.train(recipe, data, steps, seed, out)

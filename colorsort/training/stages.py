@@ -124,26 +124,28 @@ def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
     (root / "meta" / "complete").write_text("\n".join(p.name for p in parts) + "\n")  # what it was merged from
 
 
-def label(recipe: Recipe, run_dir: Path, variant: str, k: int, round_: int, out: Path,
-          model: Path | None = None, step: int | None = None) -> Path:
-    """``colorsort-takeover`` of DAgger round ``round_`` on training variant ``variant`` (the k-th): ``model`` of
-    ``run_dir`` drives (its checkpoint after ``step`` updates; None: the last), the expert labels (reused if there).
-    Round r's episodes of variant k have seeds from ``TAKEOVER_SEED + k * SEED_STRIDE + (r - 1) * episodes``: no
-    round or variant repeats one."""
+def checkpoint_name(model: Path) -> str:
+    """A checkpoint's ``pretrained_model`` by its run's cache name, with ``@<update>`` unless it is the last one."""
+    run_dir, checkpoint = model.parents[1].parent, model.parent.name
+    return run_dir.name if checkpoint == "last" else f"{run_dir.name}@{int(checkpoint)}"
+
+
+def label(recipe: Recipe, model: Path, variant: str, k: int, round_: int, out: Path) -> Path:
+    """``colorsort-takeover`` of DAgger round ``round_`` on training variant ``variant`` (the k-th): ``model`` (a
+    checkpoint's ``pretrained_model``) drives, the expert labels (reused if there). Round r's episodes of variant k
+    have seeds from ``TAKEOVER_SEED + k * SEED_STRIDE + (r - 1) * episodes``: no round or variant repeats one."""
     from colorsort.training.takeover import TAKEOVER_SEED
 
     dagger = recipe.dagger
     seed = TAKEOVER_SEED + k * SEED_STRIDE + (round_ - 1) * dagger.episodes
     args = ["--variant", variant, "--episodes", str(dagger.episodes), "--handover", "{},{}".format(*dagger.handover),
             "--seed", str(seed), "--repo-id", REPO_ID, "--vcodec", CollectConfig.vcodec]  # the demos' codec
-    policy = run_dir.name if step is None else f"{run_dir.name}@{step}"  # the policy by its run's cache name
-    settings = {"colorsort-takeover": ["--policy", policy, *args]}
+    settings = {"colorsort-takeover": ["--policy", checkpoint_name(model), *args]}
     root = out / "data" / cache.name(f"labels-{variant}-r{round_}", settings)
     if (root / cache.SETTINGS_FILE).is_file():
         print(f"reusing {root}")
         return root
     shutil.rmtree(root, ignore_errors=True)
-    model = model or run_dir / "checkpoints" / "last" / "pretrained_model"
     run([str(BIN / "colorsort-takeover"), "--policy", str(model), *args, "--out", str(root)],
         out / "logs" / f"takeover-{root.name}.log")
     cache.remember(root, settings)
