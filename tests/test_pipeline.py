@@ -11,6 +11,7 @@ from pathlib import Path
 
 import cv2
 import pytest
+import torch
 from baseline_common import run_in_process
 
 from colorsort.cli import baseline as colorsort_baseline
@@ -187,24 +188,42 @@ def test_the_camera_recipe_runs_in_small(tmp_path, in_process, capsys):
 @pytest.mark.slow
 def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys):
     """camera-diffusion, tiny: LeRobot's diffusion policy learns from the images and the arm's state, never the box
-    state (2 updates), and colorsort-eval renders exactly its cameras at its image size."""
+    state (2 updates), and colorsort-eval renders exactly its cameras at its image size. Trained in float32 first,
+    the recipe's float16 run is that run's weights rounded (no second training), scored as stored, and LeRobot loads
+    the halved file into its float32 model."""
+    from lerobot.policies.diffusion.modeling_diffusion import DiffusionPolicy
+    from safetensors.torch import load_file
+
     from colorsort.benchmark.evaluate import observation_settings
 
     out = tmp_path / "diffusion"
-    status, printed = baseline_main(["--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=lighting:1",
-                                     "--demos.boxes_per_episode=1", "--training.steps=2", "--training.seeds=1000",
-                                     "--training.batch_size=2", "--training.num_workers=0",
-                                     "--evaluation.variants=default", "--evaluation.episodes=1",
-                                     "--evaluation.curve_episodes=1", "--evaluation.episode_length=5",
-                                     "--workers", "1", "--envs", "1", "--out", str(out)], capsys)
+    argv = ["--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=lighting:1",
+            "--demos.boxes_per_episode=1", "--training.steps=2", "--training.seeds=1000", "--training.batch_size=2",
+            "--training.num_workers=0", "--evaluation.variants=default", "--evaluation.episodes=1",
+            "--evaluation.curve_episodes=1", "--evaluation.episode_length=5", "--workers", "1", "--envs", "1",
+            "--out", str(out)]
+    status, printed = baseline_main(argv + ["--training.weights=float32"], capsys)
     assert status == 0, printed[-3000:]
-    (model,) = (out / "train").glob("demos-1-*-2steps-*-seed1000/checkpoints/last/pretrained_model")
+    (full,) = (out / "train").glob("demos-1-*-2steps-*-seed1000")
+    model = full / "checkpoints" / "last" / "pretrained_model"
     config = json.loads((model / "config.json").read_text())
     assert config["type"] == "diffusion"
     assert set(config["input_features"]) == {"observation.state", "observation.images.snapshot"}
     assert (config["prediction_type"], config["noise_scheduler_type"]) == ("sample", "DDIM")
     assert observation_settings(str(model), None, None) == (("snapshot",), (64, 64))
     assert f"| default | {get_recipe('camera-diffusion').label} | 1 | 2 steps" in printed
+
+    status, printed = baseline_main(argv, capsys)
+    assert status == 0, printed[-3000:]
+    assert f"rounding {full}'s weights to float16" in printed and "lerobot-train" not in printed
+    (halved,) = set((out / "train").glob("demos-1-*-2steps-*-seed1000")) - {full}
+    stored = load_file(halved / "checkpoints" / "last" / "pretrained_model" / "model.safetensors")
+    assert {t.dtype for t in stored.values() if t.is_floating_point()} == {torch.float16}
+    assert any(halved.name in p.name for p in (out / "eval").glob("*.json"))  # scored as stored
+    policy = DiffusionPolicy.from_pretrained(halved / "checkpoints" / "last" / "pretrained_model")
+    weights = dict(policy.named_parameters())
+    name = next(k for k in stored if k in weights and stored[k].ndim > 1)
+    assert weights[name].dtype == torch.float32 and torch.equal(weights[name], stored[name].float())
 
 
 @pytest.mark.slow

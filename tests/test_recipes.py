@@ -27,7 +27,7 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
     cmd = train_command(recipe, tmp_path / "demos-48", 5000, 1000, tmp_path / "run")
     for arg in ("--policy.type=diffusion", "--policy.use_group_norm=true", "--policy.pretrained_backbone_weights=null",
                 "--policy.use_separate_rgb_encoder_per_camera=false", "--policy.crop_shape=[58,58]",
-                "--policy.down_dims=[32,64]", "--policy.n_obs_steps=1", "--policy.num_inference_steps=10"):
+                "--policy.down_dims=[64,128]", "--policy.n_obs_steps=1", "--policy.num_inference_steps=10"):
         assert arg in cmd
     assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", {"demos.image_size": 32}),
                                                           tmp_path, 1, 1, tmp_path)

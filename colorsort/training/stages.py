@@ -34,6 +34,7 @@ from colorsort.data.config import CollectConfig
 from colorsort.errors import DataConflictError, StageError
 from colorsort.training import cache
 from colorsort.training.recipes import Recipe
+from colorsort.training.weights import halved_copy, store
 
 REPO_ID = "local/colorsort-baseline"
 BIN = Path(sys.executable).parent  # the console scripts of this interpreter's environment
@@ -199,7 +200,21 @@ def train_settings(recipe: Recipe) -> dict:
     inference = tuple(f"--policy.{k}=" for k in recipe.policy.inference())
     args = train_command(recipe, Path("DATA"), 1, 0, Path("RUN"))[1:]
     skip = ("--dataset.root=", "--steps=", "--save_freq=", "--seed=", "--output_dir=", *inference)
-    return {"lerobot-train": [a for a in args if not a.startswith(skip)]}
+    settings: dict = {"lerobot-train": [a for a in args if not a.startswith(skip)]}
+    if recipe.training.weights != "float32":  # float32 runs keep the folders they always had
+        settings["weights"] = recipe.training.weights
+    return settings
+
+
+def run_name(recipe: Recipe, data: Path, steps: int, seed: int) -> str:
+    """A training run's folder name under ``train/``: its data, length, settings (``train_settings``) and seed."""
+    return f"{data.name}-{steps}steps-{cache.key(train_settings(recipe))}-seed{seed}"
+
+
+def finished(run_dir: Path) -> bool:
+    """Whether ``run_dir`` is a finished training run (its last checkpoint and its timing are there)."""
+    return ((run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file()
+            and run_dir.with_name(run_dir.name + ".json").is_file())
 
 
 def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
@@ -207,13 +222,23 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
 
     The timing is ``{"started": unix time, "wall_s": s, "settings": ...}``, and ``"resumed"`` where the run was
     interrupted and resumed from its last checkpoint (``resume``): its gaps are not training time."""
-    run_dir = out / "train" / f"{data.name}-{steps}steps-{cache.key(train_settings(recipe))}-seed{seed}"
+    run_dir = out / "train" / run_name(recipe, data, steps, seed)
     timing_path = run_dir.with_name(run_dir.name + ".json")  # not with_suffix: "-shift0.1-seed1000" has a dot
     running_path = run_dir.with_name(run_dir.name + ".running.json")
-    if (run_dir / "checkpoints" / "last" / "pretrained_model" / "config.json").is_file() and timing_path.is_file():
+    if finished(run_dir):
         print(f"reusing {run_dir}")
         set_inference(run_dir, recipe)
         return run_dir, json.loads(timing_path.read_text())
+    weights = recipe.training.weights
+    full = run_dir.with_name(run_name(recipe.override({"training.weights": "float32"}), data, steps, seed))
+    if weights != "float32" and finished(full) and not running_path.is_file():
+        print(f"rounding {full}'s weights to {weights}")
+        if run_dir.exists():
+            shutil.rmtree(run_dir)
+        timing = halved_copy(full, run_dir, weights)
+        timing_path.write_text(json.dumps(timing))
+        set_inference(run_dir, recipe)
+        return run_dir, timing
     log = out / "logs" / f"train-{run_dir.name}.log"
     last = run_dir / "checkpoints" / "last"
     if (last / "training_state" / "training_step.json").is_file() and running_path.is_file():
@@ -230,6 +255,7 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
         if longer is not None:
             print(f"taking the first {steps} updates of {longer}")
             timing = first_updates(longer, steps, run_dir)
+            store(run_dir, weights)
             timing_path.write_text(json.dumps(timing))
             set_inference(run_dir, recipe)
             return run_dir, timing
@@ -237,6 +263,7 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
         run_dir.parent.mkdir(parents=True, exist_ok=True)
         running_path.write_text(json.dumps(running))
         seconds = run(train_command(recipe, data, steps, seed, run_dir), log)
+    store(run_dir, weights)  # before the timing marks the run finished: every score is of the stored weights
     kept = sum(r["kept_s"] for r in running["resumed"])
     timing = {"started": running["started"], "wall_s": round(kept + seconds, 1),
               "settings": running["settings"], **({"resumed": running["resumed"]} if running["resumed"] else {})}

@@ -1,0 +1,71 @@
+"""Checkpoints stored in float16: every floating tensor rounded, the rest and the training state untouched, a float32
+run's copy rounded in place of a new training, and LeRobot's own loader taking the halved file into its float32
+model."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+import torch
+from safetensors.torch import load_file, save_file
+
+from colorsort.training import cache, stages
+from colorsort.training.recipes import get_recipe
+from colorsort.training.weights import halved_copy, store
+
+
+def fake_run(run_dir, steps=(1, 2)):
+    """A finished lerobot-train run's folders: per checkpoint a model (float32 weights, an int64 counter) and its
+    training state; ``last`` linking to the final one; the timing beside the run."""
+    rng = np.random.default_rng(0)
+    for step in steps:
+        ckpt = run_dir / "checkpoints" / f"{step:06d}"
+        (ckpt / "pretrained_model").mkdir(parents=True)
+        (ckpt / "training_state").mkdir()
+        save_file({"w": torch.from_numpy(rng.normal(size=(4, 3)).astype(np.float32)),
+                   "count": torch.tensor([step], dtype=torch.int64)}, ckpt / "pretrained_model" / "model.safetensors")
+        (ckpt / "training_state" / "training_step.json").write_text(json.dumps({"step": step}))
+        os.utime(ckpt / "training_state" / "training_step.json", (1000.0 + step, 1000.0 + step))
+    (run_dir / "checkpoints" / "last").symlink_to(f"{steps[-1]:06d}")
+    run_dir.with_name(run_dir.name + ".json").write_text(json.dumps({"started": 900.0, "wall_s": 102.0}))
+
+
+def test_storing_float16_rounds_every_floating_tensor_once_and_leaves_the_rest(tmp_path):
+    run_dir = tmp_path / "run"
+    fake_run(run_dir)
+    before = load_file(run_dir / "checkpoints" / "000002" / "pretrained_model" / "model.safetensors")
+    assert store(run_dir, "float32") == 0
+    assert store(run_dir, "float16") == 2  # both checkpoints, not "last" again
+    after = load_file(run_dir / "checkpoints" / "000002" / "pretrained_model" / "model.safetensors")
+    assert after["w"].dtype == torch.float16 and torch.equal(after["w"], before["w"].half())
+    assert after["count"].dtype == torch.int64 and after["count"].item() == 2
+    assert store(run_dir, "float16") == 0  # already stored so
+    size = (run_dir / "checkpoints" / "000002" / "pretrained_model" / "model.safetensors").stat().st_size
+    assert size < 200  # 12 weights of 2 bytes, 1 counter of 8, and the header
+
+
+def test_a_float16_run_is_its_float32_twins_checkpoints_rounded_with_the_same_training_time(tmp_path):
+    full, halved = tmp_path / "train" / "full", tmp_path / "train" / "halved"
+    fake_run(full)
+    timing = halved_copy(full, halved, "float16")
+    assert timing == {"started": 900.0, "wall_s": 102.0, "weights_of": "full"}
+    assert (halved / "checkpoints" / "last").readlink().name == "000002"
+    for step in ("000001", "000002"):
+        ours = load_file(halved / "checkpoints" / step / "pretrained_model" / "model.safetensors")
+        theirs = load_file(full / "checkpoints" / step / "pretrained_model" / "model.safetensors")
+        assert ours["w"].dtype == torch.float16 and theirs["w"].dtype == torch.float32  # the twin is kept
+        assert torch.equal(ours["w"], theirs["w"].half())
+        saved = halved / "checkpoints" / step / "training_state" / "training_step.json"
+        assert saved.stat().st_mtime == 1000.0 + int(step)  # a checkpoint's minutes of training come from it
+
+
+def test_the_weights_setting_names_its_runs_apart_and_keeps_float32_keys_as_they_were():
+    """float16 gets a run folder of its own; float32 (every ACT recipe) the key it had before the setting existed."""
+    preset = get_recipe("camera-diffusion")
+    full = preset.override({"training.weights": "float32"})
+    assert preset.training.weights == "float16" and "weights" not in stages.train_settings(full)
+    assert cache.key(stages.train_settings(preset)) != cache.key(stages.train_settings(full))
+    assert get_recipe("camera").training.weights == "float32"
+    with pytest.raises(ValueError, match=r"weights='bfloat16': valid weights are \['float32', 'float16'\]"):
+        get_recipe("camera", {"training.weights": "bfloat16"})
