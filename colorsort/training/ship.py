@@ -185,10 +185,14 @@ def write_readme(recipe: Recipe, results: Results, dest: Path) -> None:
                     f"{s.started} ({s.wall_s / 60:.0f} min)." for s in results.added)
     task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
     sha = results.commit or "unknown"
+    stored = ("" if training.weights == "float32" else
+              f" The weights are stored in {training.weights}, rounded from `lerobot-train`'s float32 before any "
+              "checkpoint was scored: every score here is of these weights (LeRobot loads them into its float32 "
+              "model).")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
 
 {recipe.policy.describe(parameters(dest))}{backbone}, on {inputs}.
-{size_mb:.1f} MB.
+{size_mb:.1f} MB.{stored}
 
 Made by `{results.command}` (recipe `{recipe.name}`) on commit {sha}, started {results.started}, on
 {machine(training.device)}: {demos.counts[-1]} expert demos tried ({demo_line(recipe)}),
