@@ -1,6 +1,6 @@
-"""Checkpoints stored in float16: every floating tensor rounded, the rest and the training state untouched, a float32
-run's copy rounded in place of a new training, and LeRobot's own loader taking the halved file into its float32
-model."""
+"""Checkpoints stored in float16: every floating tensor rounded, the rest and the file's mode untouched, the float32
+file kept beside the training state, a float32 run's copy rounded in place of a new training. (LeRobot's own loader
+taking the halved file into its float32 model: test_pipeline's diffusion recipe in small.)"""
 
 import json
 import os
@@ -25,6 +25,7 @@ def fake_run(run_dir, steps=(1, 2)):
         (ckpt / "training_state").mkdir()
         save_file({"w": torch.from_numpy(rng.normal(size=(4, 3)).astype(np.float32)),
                    "count": torch.tensor([step], dtype=torch.int64)}, ckpt / "pretrained_model" / "model.safetensors")
+        (ckpt / "pretrained_model" / "model.safetensors").chmod(0o644)
         (ckpt / "training_state" / "training_step.json").write_text(json.dumps({"step": step}))
         os.utime(ckpt / "training_state" / "training_step.json", (1000.0 + step, 1000.0 + step))
     (run_dir / "checkpoints" / "last").symlink_to(f"{steps[-1]:06d}")
@@ -41,8 +42,11 @@ def test_storing_float16_rounds_every_floating_tensor_once_and_leaves_the_rest(t
     assert after["w"].dtype == torch.float16 and torch.equal(after["w"], before["w"].half())
     assert after["count"].dtype == torch.int64 and after["count"].item() == 2
     assert store(run_dir, "float16") == 0  # already stored so
-    size = (run_dir / "checkpoints" / "000002" / "pretrained_model" / "model.safetensors").stat().st_size
-    assert size < 200  # 12 weights of 2 bytes, 1 counter of 8, and the header
+    kept = load_file(run_dir / "checkpoints" / "000002" / "training_state" / "model.float32.safetensors")
+    assert kept["w"].dtype == torch.float32 and torch.equal(kept["w"], before["w"])  # to measure the rounding by
+    stat = (run_dir / "checkpoints" / "000002" / "pretrained_model" / "model.safetensors").stat()
+    assert stat.st_size < 200  # 12 weights of 2 bytes, 1 counter of 8, and the header
+    assert stat.st_mode & 0o777 == 0o644
 
 
 def test_a_float16_run_is_its_float32_twins_checkpoints_rounded_with_the_same_training_time(tmp_path):

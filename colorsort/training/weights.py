@@ -17,11 +17,13 @@ from pathlib import Path
 
 WEIGHTS = ("float32", "float16")
 MODEL = "model.safetensors"
+FULL = "model.float32.safetensors"  # in a checkpoint's training_state/
 
 
 def store(run_dir: Path, weights: str) -> int:
     """Round every checkpoint of ``run_dir`` to ``weights`` (its floating tensors; nothing for float32); how many
-    files it rewrote. The optimizer's state (``training_state``, for resuming) is left as it was."""
+    files it rewrote. The full-precision file is kept beside the optimizer's state (``training_state/``, never
+    shipped: ``FULL``), so that what the rounding changes can be measured on the same training."""
     if weights == "float32":
         return 0
     import torch
@@ -35,8 +37,12 @@ def store(run_dir: Path, weights: str) -> int:
         tensors = load_file(path)
         if all(t.dtype == dtype or not t.is_floating_point() for t in tensors.values()):
             continue
+        mode, full = path.stat().st_mode, path.parent.parent / "training_state" / FULL
+        if full.parent.is_dir() and not full.exists():
+            shutil.copy2(path, full)
         save_file({k: t.to(dtype) if t.is_floating_point() else t for k, t in tensors.items()}, path,
                   metadata={"format": "pt"})
+        path.chmod(mode)  # safetensors writes its files readable by their owner alone
         rewritten += 1
     return rewritten
 
