@@ -10,6 +10,8 @@ Layout of the working folder ``out``::
     train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its
                               timing and settings; under a constant rate, the first S updates of a longer run;
                               <run>.running.json while it trains (an interrupted run resumes from its last checkpoint)
+                              with training.weights=float16 its checkpoints rounded (``weights``), or copied from the
+                              finished float32 run of the same training and rounded
     eval/<run>[-at<U>]-<exec>-<variant>-<key>.json  colorsort-eval's report of the run's last checkpoint (or
                               the one after U updates, when the validation seeds chose it), executing its chunks
                               as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
