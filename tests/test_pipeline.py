@@ -190,7 +190,8 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
     """camera-diffusion, tiny: LeRobot's diffusion policy learns from the images and the arm's state, never the box
     state (2 updates), and colorsort-eval renders exactly its cameras at its image size. Trained in float32 first,
     the recipe's float16 run is that run's weights rounded (no second training), scored as stored, and LeRobot loads
-    the halved file into its float32 model."""
+    the halved file into its float32 model; the run with each checkpoint the mean of the latest two is that run's
+    checkpoints averaged (no third training)."""
     from lerobot.policies.diffusion.modeling_diffusion import DiffusionPolicy
     from safetensors.torch import load_file
 
@@ -200,8 +201,8 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
     argv = ["--recipe", "camera-diffusion", "--demos.counts=1", "--demos.train_mix=lighting:1",
             "--demos.boxes_per_episode=1", "--training.steps=2", "--training.seeds=1000", "--training.batch_size=2",
             "--training.num_workers=0", "--evaluation.variants=default", "--evaluation.episodes=1",
-            "--evaluation.curve_episodes=1", "--evaluation.episode_length=5", "--workers", "1", "--envs", "1",
-            "--out", str(out)]
+            "--evaluation.curve_episodes=1", "--evaluation.episode_length=5", "--training.save_every=1",
+            "--evaluation.select_episodes=0", "--workers", "1", "--envs", "1", "--out", str(out)]
     status, printed = baseline_main(argv + ["--training.weights=float32"], capsys)
     assert status == 0, printed[-3000:]
     (full,) = (out / "train").glob("demos-1-*-2steps-*-seed1000")
@@ -215,7 +216,7 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
 
     status, printed = baseline_main(argv, capsys)
     assert status == 0, printed[-3000:]
-    assert f"rounding {full}'s weights to float16" in printed and "lerobot-train" not in printed
+    assert f"copying {full}'s checkpoints in float16\n" in printed and "lerobot-train" not in printed
     (halved,) = set((out / "train").glob("demos-1-*-2steps-*-seed1000")) - {full}
     stored = load_file(halved / "checkpoints" / "last" / "pretrained_model" / "model.safetensors")
     assert {t.dtype for t in stored.values() if t.is_floating_point()} == {torch.float16}
@@ -224,6 +225,16 @@ def test_the_diffusion_camera_recipe_runs_in_small(tmp_path, in_process, capsys)
     weights = dict(policy.named_parameters())
     name = next(k for k in stored if k in weights and stored[k].ndim > 1)
     assert weights[name].dtype == torch.float32 and torch.equal(weights[name], stored[name].float())
+
+    status, printed = baseline_main(argv + ["--training.average=2"], capsys)
+    assert status == 0, printed[-3000:]
+    assert f"copying {full}'s checkpoints in float16, each the mean of the latest 2" in printed
+    assert "lerobot-train" not in printed
+    (averaged,) = set((out / "train").glob("demos-1-*-2steps-*-seed1000")) - {full, halved}
+    ours = load_file(averaged / "checkpoints" / "000002" / "pretrained_model" / "model.safetensors")[name]
+    first, last = (load_file(full / "checkpoints" / step / "pretrained_model" / "model.safetensors")[name]
+                   for step in ("000001", "000002"))
+    assert ours.dtype == torch.float16 and torch.equal(ours, ((first.double() + last.double()) / 2).half())
 
 
 @pytest.mark.slow

@@ -1,6 +1,7 @@
 """Checkpoints stored in float16: every floating tensor rounded, the rest and the file's mode untouched, the float32
-file kept beside the training state, a float32 run's copy rounded in place of a new training. (LeRobot's own loader
-taking the halved file into its float32 model: test_pipeline's diffusion recipe in small.)"""
+file kept beside the training state, a float32 run's copy rounded in place of a new training; checkpoints averaged
+over the latest k, from lerobot-train's own weights whatever the file holds. (LeRobot's own loader taking the
+halved file into its float32 model: test_pipeline's diffusion recipe in small.)"""
 
 import json
 import os
@@ -12,7 +13,7 @@ from safetensors.torch import load_file, save_file
 
 from colorsort.training import cache, stages
 from colorsort.training.recipes import get_recipe
-from colorsort.training.weights import halved_copy, store
+from colorsort.training.weights import FULL, average, derived_copy, saved_every, store
 
 
 def fake_run(run_dir, steps=(1, 2)):
@@ -52,7 +53,7 @@ def test_storing_float16_rounds_every_floating_tensor_once_and_leaves_the_rest(t
 def test_a_float16_run_is_its_float32_twins_checkpoints_rounded_with_the_same_training_time(tmp_path):
     full, halved = tmp_path / "train" / "full", tmp_path / "train" / "halved"
     fake_run(full)
-    timing = halved_copy(full, halved, "float16")
+    timing = derived_copy(full, halved, "float16")
     assert timing == {"started": 900.0, "wall_s": 102.0, "weights_of": "full"}
     assert (halved / "checkpoints" / "last").readlink().name == "000002"
     for step in ("000001", "000002"):
@@ -73,3 +74,54 @@ def test_the_weights_setting_names_its_runs_apart_and_keeps_float32_keys_as_they
     assert get_recipe("camera").training.weights == "float32"
     with pytest.raises(ValueError, match=r"weights='bfloat16': valid weights are \['float32', 'float16'\]"):
         get_recipe("camera", {"training.weights": "bfloat16"})
+
+
+def weights_of(run_dir, step, name="model.safetensors"):
+    folder = "pretrained_model" if name == "model.safetensors" else "training_state"
+    return load_file(run_dir / "checkpoints" / f"{step:06d}" / folder / name)
+
+
+def test_averaging_gives_each_checkpoint_the_mean_of_the_latest_k_of_lerobots_own_weights(tmp_path):
+    run_dir = tmp_path / "run"
+    fake_run(run_dir, steps=(1, 2, 3, 4))
+    raw = {step: weights_of(run_dir, step)["w"] for step in (1, 2, 3, 4)}
+    assert saved_every(run_dir, 2, 4) and not saved_every(run_dir, 2, 6)  # what a twin must have to be averaged
+    assert average(run_dir, 1) == 0
+    assert average(run_dir, 3) == 4
+    assert torch.equal(weights_of(run_dir, 1)["w"], raw[1])  # the first has nothing before it
+    assert torch.allclose(weights_of(run_dir, 2)["w"], (raw[1] + raw[2]) / 2)
+    assert torch.allclose(weights_of(run_dir, 4)["w"], (raw[2] + raw[3] + raw[4]) / 3, atol=1e-7)
+    assert weights_of(run_dir, 4)["count"].item() == 4  # counters are the checkpoint's own
+    assert torch.equal(weights_of(run_dir, 4, FULL)["w"], raw[4])  # lerobot-train's file kept
+    assert average(run_dir, 3) == 0  # already averaged so
+    assert store(run_dir, "float16") == 4  # then rounded, still naming what it averaged
+    assert torch.equal(weights_of(run_dir, 4)["w"], ((raw[2] + raw[3] + raw[4]) / 3).half())
+    from safetensors import safe_open
+    with safe_open(str(run_dir / "checkpoints" / "000004" / "pretrained_model" / "model.safetensors"), "pt") as f:
+        assert f.metadata()["averaged"] == "000002,000003,000004"
+    assert average(run_dir, 2) == 2  # another window: averaged anew from the kept files (000002's is the same)
+    assert torch.allclose(weights_of(run_dir, 4)["w"], (raw[3] + raw[4]) / 2)
+
+
+def test_an_averaged_run_is_copied_from_a_rounded_twin_out_of_its_float32_files(tmp_path):
+    twin, averaged = tmp_path / "train" / "twin", tmp_path / "train" / "averaged"
+    fake_run(twin, steps=(1, 2, 3))
+    raw = {step: weights_of(twin, step)["w"] for step in (1, 2, 3)}
+    store(twin, "float16")  # the shipped recipe's runs are rounded: their float32 files sit in training_state/
+    timing = derived_copy(twin, averaged, "float16", 2)
+    assert timing["weights_of"] == "twin"
+    assert torch.equal(weights_of(averaged, 3)["w"], ((raw[2] + raw[3]) / 2).half())
+    assert weights_of(twin, 3)["w"].dtype == torch.float16  # the twin untouched
+
+
+def test_averaging_is_part_of_a_runs_name_with_the_spacing_of_its_checkpoints_and_needs_them():
+    preset = get_recipe("camera-diffusion")
+    averaged = preset.override({"training.save_every": 500, "training.average": 4})
+    assert "average" not in stages.train_settings(preset)
+    assert stages.train_settings(averaged)["average"] == [4, 500]
+    assert cache.key(stages.train_settings(averaged)) != cache.key(stages.train_settings(
+        averaged.override({"training.save_every": 1000})))
+    with pytest.raises(ValueError, match="average=4 averages checkpoints saved along the run: give save_every"):
+        get_recipe("camera", {"training.save_every": 0, "training.average": 4})
+    with pytest.raises(ValueError, match="average=0: give at least 1"):
+        get_recipe("camera", {"training.average": 0})

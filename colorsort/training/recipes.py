@@ -154,6 +154,9 @@ class TrainSettings:
         weights: how the checkpoints store their weights: float32 as ``lerobot-train`` writes them, or float16
             (half the file; rounded before any checkpoint is validated or scored, so every score is of the stored
             weights: ``colorsort.training.weights``).
+        average: checkpoints in each scored one: 1, ``lerobot-train``'s weights; k > 1, each checkpoint's weights the
+            mean of its own and the k - 1 saved before it (every ``save_every`` updates), as Diffusion Policy scores
+            a moving average of its weights (``colorsort.training.weights.average``).
     """
 
     steps: int = 6000
@@ -167,9 +170,13 @@ class TrainSettings:
     device: str = "cpu"
     num_workers: int = 1
     weights: str = "float32"
+    average: int = 1
 
     def __post_init__(self) -> None:
-        _at_least_one(self, "steps", "small_steps", "batch_size")
+        _at_least_one(self, "steps", "small_steps", "batch_size", "average")
+        if self.average > 1 and not self.save_every:
+            raise ConfigError(f"average={self.average} averages checkpoints saved along the run: give save_every "
+                              "above 0 too (or average=1)")
         if self.weights not in WEIGHTS:
             raise ConfigError(f"weights={self.weights!r}: valid weights are {list(WEIGHTS)}")
         if self.num_workers < 0:

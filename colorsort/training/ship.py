@@ -189,6 +189,9 @@ def write_readme(recipe: Recipe, results: Results, dest: Path) -> None:
               f" The weights are stored in {training.weights}, rounded from `lerobot-train`'s float32 before any "
               "checkpoint was scored: every score here is of these weights (LeRobot loads them into its float32 "
               "model).")
+    if training.average > 1:
+        stored += (f" Each checkpoint's weights are the mean of its own and the {training.average - 1} saved before "
+                   f"it (one every {training.save_every} updates; `colorsort.training.weights.average`).")
     (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
 
 {recipe.policy.describe(parameters(dest))}{backbone}, on {inputs}.

@@ -10,8 +10,9 @@ Layout of the working folder ``out``::
     train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its
                               timing and settings; under a constant rate, the first S updates of a longer run;
                               <run>.running.json while it trains (an interrupted run resumes from its last checkpoint)
-                              with training.weights=float16 its checkpoints rounded (``weights``), or copied from the
-                              finished float32 run of the same training and rounded
+                              with training.weights=float16 its checkpoints rounded, with training.average=k each
+                              the mean of the latest k (``weights``), or copied from a finished run of the same
+                              training with lerobot-train's own weights and rounded or averaged
     eval/<run>[-at<U>]-<exec>-<variant>-<key>.json  colorsort-eval's report of the run's last checkpoint (or
                               the one after U updates, when the validation seeds chose it), executing its chunks
                               as <exec> says (ens0.01: temporal ensembling; chunk10: 10 open-loop)
@@ -36,7 +37,7 @@ from colorsort.data.config import CollectConfig
 from colorsort.errors import DataConflictError, StageError
 from colorsort.training import cache
 from colorsort.training.recipes import Recipe
-from colorsort.training.weights import halved_copy, store
+from colorsort.training.weights import average, derived_copy, saved_every, store
 
 REPO_ID = "local/colorsort-baseline"
 BIN = Path(sys.executable).parent  # the console scripts of this interpreter's environment
@@ -205,7 +206,23 @@ def train_settings(recipe: Recipe) -> dict:
     settings: dict = {"lerobot-train": [a for a in args if not a.startswith(skip)]}
     if recipe.training.weights != "float32":  # float32 runs keep the folders they always had
         settings["weights"] = recipe.training.weights
+    if recipe.training.average > 1:  # which checkpoints are averaged depends on how often they are saved
+        settings["average"] = [recipe.training.average, recipe.training.save_every]
     return settings
+
+
+def twins(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> list[Path]:
+    """The runs of the same training whose checkpoints hold ``lerobot-train``'s own weights (float32, or float16 with
+    the float32 file kept), from which a rounded or averaged run is copied instead of trained; none for a run that
+    is one of them."""
+    training = recipe.training
+    if training.weights == "float32" and training.average == 1:
+        return []
+    plain = [{"training.weights": "float32", "training.average": 1}]
+    if training.average > 1:
+        plain.append({"training.weights": training.weights, "training.average": 1})
+    return [out / "train" / run_name(recipe.override(o), data, steps, seed) for o in plain]
+
 
 
 def run_name(recipe: Recipe, data: Path, steps: int, seed: int) -> str:
@@ -231,16 +248,18 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
         print(f"reusing {run_dir}")
         set_inference(run_dir, recipe)
         return run_dir, json.loads(timing_path.read_text())
-    weights = recipe.training.weights
-    full = run_dir.with_name(run_name(recipe.override({"training.weights": "float32"}), data, steps, seed))
-    if weights != "float32" and finished(full) and not running_path.is_file():
-        print(f"rounding {full}'s weights to {weights}")
-        if run_dir.exists():
-            shutil.rmtree(run_dir)
-        timing = halved_copy(full, run_dir, weights)
-        timing_path.write_text(json.dumps(timing))
-        set_inference(run_dir, recipe)
-        return run_dir, timing
+    weights, k = recipe.training.weights, recipe.training.average
+    for twin in twins(recipe, data, steps, seed, out):
+        if (finished(twin) and not running_path.is_file()
+                and (k == 1 or saved_every(twin, recipe.training.save_every, steps))):
+            mean = f", each the mean of the latest {k}" if k > 1 else ""
+            print(f"copying {twin}'s checkpoints in {weights}{mean}")
+            if run_dir.exists():
+                shutil.rmtree(run_dir)
+            timing = derived_copy(twin, run_dir, weights, k)
+            timing_path.write_text(json.dumps(timing))
+            set_inference(run_dir, recipe)
+            return run_dir, timing
     log = out / "logs" / f"train-{run_dir.name}.log"
     last = run_dir / "checkpoints" / "last"
     if (last / "training_state" / "training_step.json").is_file() and running_path.is_file():
@@ -257,6 +276,7 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
         if longer is not None:
             print(f"taking the first {steps} updates of {longer}")
             timing = first_updates(longer, steps, run_dir)
+            average(run_dir, k)
             store(run_dir, weights)
             timing_path.write_text(json.dumps(timing))
             set_inference(run_dir, recipe)
@@ -265,7 +285,8 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
         run_dir.parent.mkdir(parents=True, exist_ok=True)
         running_path.write_text(json.dumps(running))
         seconds = run(train_command(recipe, data, steps, seed, run_dir), log)
-    store(run_dir, weights)  # before the timing marks the run finished: every score is of the stored weights
+    average(run_dir, k)  # before the timing marks the run finished: every score is of the stored weights
+    store(run_dir, weights)
     kept = sum(r["kept_s"] for r in running["resumed"])
     timing = {"started": running["started"], "wall_s": round(kept + seconds, 1),
               "settings": running["settings"], **({"resumed": running["resumed"]} if running["resumed"] else {})}
