@@ -224,7 +224,6 @@ def twins(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> list[
     return [out / "train" / run_name(recipe.override(o), data, steps, seed) for o in plain]
 
 
-
 def run_name(recipe: Recipe, data: Path, steps: int, seed: int) -> str:
     """A training run's folder name under ``train/``: its data, length, settings (``train_settings``) and seed."""
     return f"{data.name}-{steps}steps-{cache.key(train_settings(recipe))}-seed{seed}"

@@ -59,11 +59,11 @@ def average(run_dir: Path, k: int) -> int:
             if (f.metadata() or {}).get("averaged") == names:
                 continue
         total: dict[str, torch.Tensor] = {}
-        for other in window:
-            for key, tensor in load_file(other / "training_state" / FULL).items():
+        for other in window:  # the last is step_dir itself, whose non-floating tensors (counters) are kept
+            own = load_file(other / "training_state" / FULL)
+            for key, tensor in own.items():
                 total[key] = total[key] + tensor.double() if key in total else tensor.double()
-        raw = load_file(step_dir / "training_state" / FULL)  # non-floating tensors (counters) are its own
-        mean = {key: (total[key] / len(window)).to(t.dtype) if t.is_floating_point() else t for key, t in raw.items()}
+        mean = {key: (total[key] / len(window)).to(t.dtype) if t.is_floating_point() else t for key, t in own.items()}
         mode = model.stat().st_mode
         save_file(mean, model, metadata={"format": "pt", "averaged": names})
         model.chmod(mode)
@@ -83,9 +83,8 @@ def store(run_dir: Path, weights: str) -> int:
 
     dtype = getattr(torch, weights)
     rewritten = 0
-    for path in sorted(run_dir.glob(f"checkpoints/*/pretrained_model/{MODEL}")):
-        if path.parent.parent.is_symlink():  # "last" points at a step's folder
-            continue
+    for step_dir in _steps(run_dir):
+        path = step_dir / "pretrained_model" / MODEL
         tensors = load_file(path)
         if all(t.dtype == dtype or not t.is_floating_point() for t in tensors.values()):
             continue
