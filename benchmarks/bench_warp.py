@@ -2,7 +2,7 @@
 
 Run on a machine with a CUDA GPU and the ``gpu`` extra (``pip install -e ".[gpu]"``)::
 
-    python benchmarks/bench_warp.py --policy baselines/act-state
+    python benchmarks/bench_warp.py --policy baselines/act-camera-snapshot --policy-worlds 4096 --policy-episodes 8192
 
 It measures, in one process on one machine:
 - the first build of the batched cell (Warp's kernel compile, cached afterwards under ~/.cache/warp);
@@ -11,8 +11,10 @@ It measures, in one process on one machine:
   physics steps per second are that times the physics steps of a control step;
 - MuJoCo's C ``mj_step`` on the same compiled model in ``--cpu-procs`` processes (one per core): physics
   only, no rules and no controller, an upper bound on what the CPU cell steps;
-- a state policy evaluated on the batched cell (``--policy``), ``N`` episodes in one wave of ``N``
-  worlds: episodes per minute and the success rate with its 95% interval.
+- a policy evaluated on the batched cell (``--policy``, state or camera), ``--policy-episodes`` episodes on
+  ``N`` worlds (``evaluate_batched``: a world that finished starts the next episode while the others run):
+  episodes per minute from start to the last episode's end, the success rate with its 95% interval, and
+  how many episodes ran into the time limit (each holds its world for the whole limit).
 Figures go to stdout and to ``docs/results/bench_warp_<arguments>.md`` (``colorsort.results``).
 """
 
@@ -57,8 +59,9 @@ def run() -> int:
     parser.add_argument("--device", default="cuda:0", help="Warp's device")
     parser.add_argument("--worlds", default="1,64,512,4096,8192", help="world counts to step")
     parser.add_argument("--steps", type=int, default=20, help="timed control steps per world count")
-    parser.add_argument("--policy", default=None, help="a state-only LeRobot checkpoint to evaluate")
-    parser.add_argument("--policy-worlds", default="1024,4096", help="worlds (= episodes, one wave) per evaluation")
+    parser.add_argument("--policy", default=None, help="a LeRobot checkpoint to evaluate")
+    parser.add_argument("--policy-worlds", default="1024,4096", help="worlds per evaluation")
+    parser.add_argument("--policy-episodes", type=int, default=None, help="episodes per evaluation (default: worlds)")
     parser.add_argument("--episode-length", type=int, default=None, help="policy episodes' step limit")
     parser.add_argument("--render-worlds", default="1024,4096", help="worlds whose cameras are rendered at once")
     parser.add_argument("--cameras", default="sensor,wrist", help="cameras rendered in the render timing")
@@ -143,12 +146,15 @@ def run() -> int:
 
         figures["policy"] = {}
         for n in [int(w) for w in args.policy_worlds.split(",")]:
-            batched = evaluate_batched(args.policy, variant.name, n, seed=10_000, envs=n, device=args.device,
+            episodes = args.policy_episodes or n
+            batched = evaluate_batched(args.policy, variant.name, episodes, seed=10_000, envs=n, device=args.device,
                                        episode_length=args.episode_length, progress=False, spec=spec)
             report, timing = batched.report, batched.timing
             lo, hi = report.success_ci95
-            row = {"episodes": n, "seconds": timing.seconds, "control_steps": timing.control_steps,
-                   "episodes_per_min": 60 * n / timing.seconds, "success": report.success_rate, "ci95": [lo, hi],
+            row = {"worlds": n, "episodes": episodes, "seconds": timing.seconds, "control_steps": timing.control_steps,
+                   "control_step_ms": 1000 * timing.seconds / timing.control_steps,
+                   "time_limit": sum(e["ended"] == "time limit" for e in report.per_episode),
+                   "episodes_per_min": 60 * episodes / timing.seconds, "success": report.success_rate, "ci95": [lo, hi],
                    "correct": report.correct, "misplaced": report.misplaced, "dropped": report.dropped,
                    "per_episode": [{k: e[k] for k in ("seed", "success", "ended", "steps")}
                                    | {"outcomes": [b["outcome"] for b in e["boxes"]]} for e in report.per_episode]}
@@ -184,15 +190,16 @@ def markdown(f: dict, args) -> str:
     lines += ["", f"CPU reference: MuJoCo's `mj_step` on the same model (no rules, no controller), "
               f"{f['cpu']['procs']} processes: {cpu:,.0f} steps/s in all, {f['cpu']['per_proc']:,.0f} per process."]
     if f.get("policy"):
-        lines += ["", f"Policy `{args.policy}` on `{f['variant']}`, one wave of N worlds from seed 10000"
+        lines += ["", f"Policy `{args.policy}` on `{f['variant']}`, seeds from 10000, the policy on the same device"
                   + (f", episodes cut at {args.episode_length} steps" if args.episode_length else "") + ":", "",
-                  "| episodes | wall [s] | control steps | episodes/min | success (95% CI) | correct | misplaced "
-                  "| dropped |",
-                  "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+                  "| worlds | episodes | wall [s] | control steps | per step [ms] | episodes/min | success (95% CI) "
+                  "| correct | misplaced | dropped | at the time limit |",
+                  "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for n, r in f["policy"].items():
-            lines.append(f"| {n} | {r['seconds']:.1f} | {r['control_steps']} | {r['episodes_per_min']:,.0f} | "
+            lines.append(f"| {n} | {r['episodes']} | {r['seconds']:.1f} | {r['control_steps']} | "
+                         f"{r['control_step_ms']:.1f} | {r['episodes_per_min']:,.0f} | "
                          f"{100 * r['success']:.1f}% ({100 * r['ci95'][0]:.1f}-{100 * r['ci95'][1]:.1f}%) | "
-                         f"{r['correct']} | {r['misplaced']} | {r['dropped']} |")
+                         f"{r['correct']} | {r['misplaced']} | {r['dropped']} | {r['time_limit']} |")
     return "\n".join(lines) + "\n"
 
 

@@ -1,11 +1,18 @@
 """Evaluate a policy on the batched cell: ``envs`` episodes at once, the policy on the cell's device.
 
-Episodes run in waves of ``envs`` worlds that start together, as LeRobot's ``lerobot-eval`` runs a
-vector env: a policy that keeps state between steps (ACT's queue of actions) is reset once per wave
-and sees every world at the same step of its episode. A world's episode ends as the CPU cell's does
-(``ColorSortGymEnv``: the variant's boxes have left play, or one was misplaced or dropped, or the step
-limit); the world runs on until its wave ends, but nothing after its end counts. Each episode's result
-is the dict ``benchmark.evaluate.EpisodeRunner.episode`` writes, so reports and JSON are the same.
+A world's episode ends as the CPU cell's does (``ColorSortGymEnv``: the variant's boxes have left play,
+or one was misplaced or dropped, or the step limit). Two ways to fill the worlds:
+
+- rolling (``run_rolling``), for policies whose only state is a queue of actions refilled for every world
+  at once (LeRobot's ACT, and Diffusion Policy on one observation): a world whose episode ended starts the
+  next seed at the queue's next refill, while the others run on, so a slow episode holds up no other;
+- waves (``run_waves``), as LeRobot's ``lerobot-eval`` runs a vector env, for any other policy and for
+  filmed evaluations: ``envs`` worlds start together, the policy is reset once per wave, and a world whose
+  episode ended runs on until its wave ends, nothing after its end counting.
+
+Each episode's result is the dict ``benchmark.evaluate.EpisodeRunner.episode`` writes, so reports and JSON
+are the same as the CPU cell's. A seed's episode is the same whichever world runs it, and when, up to the last
+bits of float32: a policy's batch of another size rounds differently, so a box may settle a few steps apart.
 """
 
 from __future__ import annotations
@@ -58,6 +65,7 @@ class BatchedPolicy:
                               "--backend cpu; the warp backend runs 'random' and state-only LeRobot checkpoints")
         self.cameras: tuple[str, ...] = ()
         self.image_size: tuple[int, int] | None = None
+        self.restart_period: int | None = 1
         if spec != "random":
             self.cameras, self.image_size = checkpoint_cameras(spec)
             from colorsort.benchmark.policies import LeRobotPolicy
@@ -65,6 +73,7 @@ class BatchedPolicy:
             loaded = LeRobotPolicy(spec, device=str(self.device))
             self.policy = loaded.policy
             self.preprocessor, self.postprocessor = loaded.preprocessor, loaded.postprocessor
+            self.restart_period = restart_period(self.policy.config)
 
     def reset(self, seed: int) -> None:
         import torch
@@ -88,6 +97,20 @@ class BatchedPolicy:
             batch[f"observation.images.{camera}"] = image.to(self.device).permute(0, 3, 1, 2).float() / 255.0
         with torch.no_grad():
             return self.postprocessor(self.policy.select_action(self.preprocessor(batch)))
+
+
+def restart_period(config) -> int | None:
+    """Control steps between the points where a LeRobot policy holds no state of any world, or None.
+
+    ACT without temporal ensembling, and Diffusion Policy on one observation, keep nothing between
+    steps but their queue of actions, filled for every world at once and emptied every ``n_action_steps``
+    steps. At each such point a world may start a new episode and the policy acts on it as on a fresh
+    episode (``run_rolling``). Any other state (an ensemble of chunks, a queue of observations) gives None.
+    """
+    steps = getattr(config, "n_action_steps", None)
+    if steps is None or getattr(config, "temporal_ensemble_coeff", None) is not None:
+        return None
+    return int(steps) if getattr(config, "n_obs_steps", 1) == 1 else None
 
 
 def tally(n_events: np.ndarray, outcome: np.ndarray, boxes: int) -> dict[str, np.ndarray]:
@@ -170,6 +193,47 @@ def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds:
     return results, WaveTiming(time.perf_counter() - start, control_steps, n)
 
 
+def run_rolling(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
+                period: int, progress: bool = True) -> tuple[list[dict], WaveTiming]:
+    """Every seed's episode, ``cell.worlds`` at a time; a world whose episode ended starts the next seed at the
+    policy's next restart point (every ``period`` control steps, ``restart_period``) while the others run on.
+    Results in seed order, each as the episode would be on its own: it starts at a restart point, where the
+    policy holds nothing of that world."""
+    n = cell.worlds
+    task = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours."
+    first = seeds[:n]
+    out = cell.reset(first + [first[-1]] * (n - len(first)))  # idle worlds repeat a seed; never counted
+    policy.reset(int(seeds[0]))
+    episode = np.arange(n)  # each world's index into seeds
+    start = np.zeros(n, int)  # the control step its episode began at
+    active = episode < len(first)
+    upcoming = len(first)
+    results: dict[int, dict] = {}
+    bar = tqdm(total=len(seeds), desc=f"{policy.name} on {variant.name} (warp)", unit="episode", disable=not progress)
+    begin, t = time.perf_counter(), 0
+    while active.any() or upcoming < len(seeds):
+        if t % period == 0 and upcoming < len(seeds) and not active.all():
+            free = np.flatnonzero(~active)[: len(seeds) - upcoming]
+            out = cell.reset(seeds[upcoming : upcoming + len(free)], worlds=free)
+            episode[free] = np.arange(upcoming, upcoming + len(free))
+            start[free], active[free] = t, True
+            upcoming += len(free)
+        out = cell.step(policy.act(out, task))
+        t += 1
+        steps = t - start
+        counts = tally(cell.n_events.numpy(), cell.ev_outcome.numpy(), variant.boxes)
+        ended = np.flatnonzero(active & (counts["done"] | counts["failed"] | (steps >= max_steps)))
+        if len(ended):
+            record = cell.record()  # one copy to the host for every world that ended now
+            for w in ended:
+                results[int(episode[w])] = episode_result(record, int(w), variant, int(steps[w]),
+                                                          steps[w] * cell.control_dt)
+            active[ended] = False
+            bar.update(len(ended))
+    bar.close()
+    return [results[k] for k in range(len(seeds))], WaveTiming(time.perf_counter() - begin, t, n)
+
+
 @dataclass(frozen=True)
 class BatchedEvaluation:
     """A batched evaluation's report (``metrics.aggregate``'s, as the CPU cell's), its timing, and the films of
@@ -202,7 +266,10 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
     cell = BatchedCell(spec, variant, min(envs, len(seeds)), device=device, max_boxes=max(variant.boxes + 2, spawns),
                        cameras=policy.cameras, image_size=policy.image_size or (64, 64))
     filming = Filming(FilmViewer(spec, variant), videos) if film else None
-    results, timing = run_waves(cell, policy, variant, seeds, max_steps, progress, filming)
+    if filming is None and policy.restart_period is not None:
+        results, timing = run_rolling(cell, policy, variant, seeds, max_steps, policy.restart_period, progress)
+    else:  # films keep whole waves of states; a policy with other state runs whole waves
+        results, timing = run_waves(cell, policy, variant, seeds, max_steps, progress, filming)
     report = aggregate(str(policy_spec), variant.name, results)
     films: dict[int, bytes] = {}
     if filming is not None:

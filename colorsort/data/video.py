@@ -5,10 +5,13 @@ from __future__ import annotations
 from fractions import Fraction
 from pathlib import Path
 from types import TracebackType
+from typing import TYPE_CHECKING
 
-import av
 import cv2
 import numpy as np
+
+if TYPE_CHECKING:  # PyAV is imported where a video is written or read: the batched cell's GPU hosts lack it
+    import av
 
 from colorsort.errors import ConfigError
 
@@ -36,6 +39,8 @@ class VideoWriter:
         """Append one RGB frame; the first frame fixes the size (cropped to even sides for yuv420p)."""
         h, w = frame.shape[0] // 2 * 2, frame.shape[1] // 2 * 2
         if self._container is None or self._stream is None:
+            import av
+
             container = av.open(str(self.path), mode="w")
             stream = container.add_stream(self.codec, rate=self.fps)
             if not isinstance(stream, av.VideoStream):
@@ -45,6 +50,8 @@ class VideoWriter:
             stream.pix_fmt = "yuv420p"
             stream.options = {"crf": str(self.crf)}
             self._container, self._stream = container, stream
+        import av
+
         video_frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame[:h, :w]), format="rgb24")
         for packet in self._stream.encode(video_frame):
             self._container.mux(packet)
@@ -87,6 +94,8 @@ def draw_lines(frame: np.ndarray, lines: list[str | tuple[str, tuple[int, int, i
 
 def read_video(path: str | Path) -> np.ndarray:
     """Decode an mp4 into RGB frames, shape (T, H, W, 3) uint8."""
+    import av
+
     with av.open(str(path)) as container:
         frames = [f.to_ndarray(format="rgb24") for f in container.decode(video=0)]
     return np.stack(frames)
