@@ -14,7 +14,9 @@ It measures, in one process on one machine:
 - a policy evaluated on the batched cell (``--policy``, state or camera), ``--policy-episodes`` episodes on
   ``N`` worlds (``evaluate_batched``: a world that finished starts the next episode while the others run):
   episodes per minute from start to the last episode's end, the success rate with its 95% interval, and
-  how many episodes ran into the time limit (each holds its world for the whole limit).
+  how many episodes ran into the time limit (each holds its world for the whole limit);
+- with ``--cpu-policy-episodes N``, the same policy on the CPU cell (robosuite, ``colorsort-eval``'s path) in
+  ``--cpu-procs`` processes on the same seeds: the CPU path's episodes per minute beside the batched cell's.
 Figures go to stdout and to ``docs/results/bench_warp_<arguments>.md`` (``colorsort.results``).
 """
 
@@ -63,6 +65,8 @@ def run() -> int:
     parser.add_argument("--policy-worlds", default="1024,4096", help="worlds per evaluation")
     parser.add_argument("--policy-episodes", type=int, default=None, help="episodes per evaluation (default: worlds)")
     parser.add_argument("--episode-length", type=int, default=None, help="policy episodes' step limit")
+    parser.add_argument("--cpu-policy-episodes", type=int, default=0,
+                        help="episodes of the policy on the CPU cell in --cpu-procs processes (0: none)")
     parser.add_argument("--render-worlds", default="1024,4096", help="worlds whose cameras are rendered at once")
     parser.add_argument("--cameras", default="sensor,wrist", help="cameras rendered in the render timing")
     parser.add_argument("--image-size", type=int, default=64, help="their size [px]")
@@ -160,6 +164,22 @@ def run() -> int:
                                    | {"outcomes": [b["outcome"] for b in e["boxes"]]} for e in report.per_episode]}
             figures["policy"][n] = row
             print(f"policy {n}: { {k: v for k, v in row.items() if k != 'per_episode'} }", flush=True)
+    if args.policy and args.cpu_policy_episodes:
+        from colorsort.benchmark.evaluate import evaluate, observation_settings
+
+        cameras, size = observation_settings(args.policy, None, None)
+        start = time.perf_counter()
+        try:
+            report = evaluate(args.policy, variant.name, args.cpu_policy_episodes, seed=10_000, cameras=cameras,
+                              image_size=size, episode_length=args.episode_length, envs=args.cpu_procs,
+                              progress=False)
+            seconds = time.perf_counter() - start
+            figures["cpu_policy"] = {"episodes": report.episodes, "procs": args.cpu_procs, "seconds": seconds,
+                                     "episodes_per_min": 60 * report.episodes / seconds,
+                                     "success": report.success_rate, "ci95": list(report.success_ci95)}
+        except Exception as error:  # the CPU cell needs robosuite's assets, and OpenGL for cameras
+            figures["cpu_policy"] = {"error": f"{type(error).__name__}: {error}"[:300]}
+        print("cpu policy", figures["cpu_policy"], flush=True)
     print(markdown(figures, args))
     if args.json:
         Path(args.json).write_text(json.dumps(figures, indent=1, default=str))
@@ -200,6 +220,16 @@ def markdown(f: dict, args) -> str:
                          f"{r['control_step_ms']:.1f} | {r['episodes_per_min']:,.0f} | "
                          f"{100 * r['success']:.1f}% ({100 * r['ci95'][0]:.1f}-{100 * r['ci95'][1]:.1f}%) | "
                          f"{r['correct']} | {r['misplaced']} | {r['dropped']} | {r['time_limit']} |")
+    c = f.get("cpu_policy")
+    if c and "error" in c:
+        lines += ["", f"The CPU cell's run of the policy failed: {c['error']}"]
+    elif c:
+        best = max(r["episodes_per_min"] for r in f["policy"].values())
+        lo, hi = c["ci95"]
+        lines += ["", f"The same policy on the CPU cell (`colorsort-eval`'s path, {c['procs']} processes, the same "
+                  f"seeds): {c['episodes']} episodes in {c['seconds']:.0f} s, {c['episodes_per_min']:,.0f} "
+                  f"episodes/min, success {100 * c['success']:.1f}% ({100 * lo:.1f}-{100 * hi:.1f}%); the "
+                  f"batched cell's best above is {best / c['episodes_per_min']:.1f} times that."]
     return "\n".join(lines) + "\n"
 
 

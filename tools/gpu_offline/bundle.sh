@@ -25,10 +25,11 @@ DISTS=$(cd "$SP" && ls -d robosuite-*.dist-info lerobot-*.dist-info draccus-*.di
         datasets-*.dist-info dill-*.dist-info multiprocess-*.dist-info gymnasium-*.dist-info \
         farama_notifications-*.dist-info termcolor-*.dist-info pyopengl-*.dist-info glfw-*.dist-info \
         mujoco-*.dist-info mujoco_warp-*.dist-info warp_lang-*.dist-info av-*.dist-info)
-# robosuite's meshes and textures and Warp's CPU compiler, examples and tests are not needed to step the cell on a GPU
+# robosuite's meshes and textures and Warp's CPU compiler, examples and tests are not needed to step the cell on a GPU;
+# the CPU cell of a state policy needs robosuite's base.xml and bases/null_mount.xml alone
 tar -C "$SP" -cf - --exclude=__pycache__ --exclude=robosuite/models/assets/robots \
     --exclude=robosuite/models/assets/grippers --exclude=robosuite/models/assets/bullet_data \
-    --exclude=robosuite/models/assets/bases --exclude=robosuite/models/assets/textures \
+    --exclude=robosuite/models/assets/bases/meshes --exclude=robosuite/models/assets/textures \
     --exclude=robosuite/models/assets/objects ${CPU_COMPILER} --exclude=warp/examples \
     --exclude=warp/tests $PKGS $DISTS | xz -T0 -6 > "$B/pkgs.tar.xz"
 for p in $POLICIES; do

@@ -1,6 +1,7 @@
 #!/bin/bash
 # On the GPU machine, from a copy of the repository: unpack bundle.sh's parts (in STAGE) and run the GPU benchmarks
-# of docs/gpu.md: bench_warp.py (speed from 1 to 8,192 worlds, the camera policy's episodes per minute) and
+# of docs/gpu.md: bench_warp.py (speed from 1 to 8,192 worlds, the camera policy's episodes per minute; the state
+# policy's on the batched cell and on the CPU cell in one process per core) and
 # bench_warp_scores.py (each shipped policy on each variant it was scored on, 200 episodes). Results (the markdown
 # docs/results would hold, JSON, logs) in RESULTS; everything ends by DEADLINE seconds.
 #
@@ -26,6 +27,11 @@ timeout $(( $(left) - 60 )) python3 benchmarks/bench_warp.py --spec outputs/cell
     --policy baselines/act-camera-snapshot --policy-worlds "$PW" --policy-episodes "$PE" --json "$RESULTS/speed.json" \
     > "$RESULTS/log_speed.txt" 2>&1
 el "bench_warp exit $?"
+# the CPU path beside the batched cell: the state policy (no OpenGL needed) on the CPU cell in one process per core
+timeout $(( $(left) / 3 )) python3 benchmarks/bench_warp.py --spec outputs/cellspec/default --device "$DEV" \
+    --worlds 1 --steps 3 --render-worlds "" --policy baselines/act-state --policy-worlds "$PW" \
+    --cpu-policy-episodes "${CPU_EPISODES:-64}" --json "$RESULTS/speed_state.json" > "$RESULTS/log_speed_state.txt" 2>&1
+el "bench_warp (state, CPU path) exit $?"
 for policy in act-camera-snapshot act-state; do
     timeout $(( $(left) / 2 )) python3 benchmarks/bench_warp_scores.py --policies "baselines/$policy" \
         --variants default,fast,jitter,lighting,distractors,seed --episodes "$EP" --device "$DEV" \
