@@ -1,4 +1,5 @@
-"""benchmarks/bench_warp_scores.py's comparison of batched-cell runs with a baseline's published CPU scores."""
+"""The batched cell's benchmark scripts: bench_warp.py's figures on Warp's CPU device in small, and
+bench_warp_scores.py's comparison of batched-cell runs with a baseline's published CPU scores."""
 
 from __future__ import annotations
 
@@ -9,8 +10,31 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "benchmarks" / "bench_warp_scores.py"
+NO_FILES = {**os.environ, "COLORSORT_RESULTS": "none"}
+
+
+@pytest.mark.slow
+def test_bench_warp_times_worlds_cameras_and_a_policy_on_both_cells(tmp_path):
+    """In small, on Warp's CPU device: control steps of 2 worlds, the snapshot camera of 2, the state policy's 3
+    episodes rolling on 2 worlds and 2 on the CPU cell in one process; every figure present and positive."""
+    argv = ["--device", "cpu", "--worlds", "2", "--steps", "1", "--render-worlds", "2", "--cameras", "snapshot",
+            "--image-size", "32", "--policy", "baselines/act-state", "--policy-worlds", "2", "--policy-episodes", "3",
+            "--episode-length", "20", "--cpu-policy-episodes", "2", "--cpu-procs", "1", "--cpu-steps", "10",
+            "--json", str(tmp_path / "f.json")]
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "bench_warp.py"), *argv], cwd=REPO,
+                         capture_output=True, text=True, env=NO_FILES)
+    assert out.returncode == 0, out.stderr[-2000:]
+    f = json.loads((tmp_path / "f.json").read_text())
+    assert f["worlds"]["2"]["control_steps_per_s"] > 0 and f["render"]["2"]["images_per_s"] > 0
+    policy = f["policy"]["2"]
+    assert policy["episodes"] == 3 and policy["control_steps"] > 20  # the third episode after one of the first two
+    assert [e["steps"] for e in policy["per_episode"]] == [20, 20, 20]  # each cut at its own 20 steps
+    assert f["cpu_policy"]["episodes"] == 2 and f["cpu_policy"]["episodes_per_min"] > 0
+    assert "times that." in out.stdout
 
 
 def cpu_row(policy: str, variant: str) -> dict:
@@ -42,7 +66,7 @@ def test_merged_runs_are_held_to_the_shipped_seeds_cpu_interval_episode_by_episo
     worse = as_run(row, policy, failed)
     (tmp_path / "runs.json").write_text(json.dumps({"gpu": "Warp's CPU device", "runs": [same, worse]}))
     out = subprocess.run([sys.executable, str(SCRIPT), "--merge", str(tmp_path / "runs.json")], cwd=REPO,
-                         capture_output=True, text=True, env={**os.environ, "COLORSORT_RESULTS": "none"})
+                         capture_output=True, text=True, env=NO_FILES)
     assert out.returncode == 0, out.stderr
     lines = [line for line in out.stdout.splitlines() if line.startswith("| `act-state`")]
     assert len(lines) == 2
