@@ -62,7 +62,7 @@ class BatchedPolicy:
         self.policy = None
         if spec == "expert":
             raise ConfigError("the expert reads the sensor camera and plans on the host: evaluate it with "
-                              "--backend cpu; the warp backend runs 'random' and state-only LeRobot checkpoints")
+                              "--backend cpu; the warp backend runs 'random' and LeRobot checkpoints")
         self.cameras: tuple[str, ...] = ()
         self.image_size: tuple[int, int] | None = None
         self.restart_period: int | None = 1
