@@ -13,7 +13,7 @@ SITE=${SITE:-/tmp/site}
 mkdir -p "$SITE" "$RESULTS/md"
 cat "$STAGE"/part-* | tar x -C "$STAGE" || { el "the parts do not make the archive"; ls -la "$STAGE"; exit 1; }
 (cd "$SITE" && xz -d -T0 < "$STAGE/pkgs.tar.xz" | tar x) || { el "unpacking failed"; exit 1; }
-mkdir -p baselines outputs && cp -r "$STAGE"/pol/* baselines/ && rm -rf outputs/cellspec \
+mkdir -p baselines outputs && cp -r "$STAGE"/pol/. baselines/ && rm -rf outputs/cellspec \
     && cp -r "$STAGE/specs" outputs/cellspec
 [ -e colorsort/assets ] || ln -s ../assets colorsort/assets  # what setup.py's package_dir maps, without installing
 # MUJOCO_GL=disable: nothing here draws with OpenGL (Warp renders), and the machine may have no EGL
