@@ -17,8 +17,9 @@ fields; ``Recipe`` checks how they fit together. Every field is a ``colorsort-ba
   ray, held until the next). The policy in ``baselines/act-camera-snapshot``.
 - ``camera-tracking``: the live ``sensor``, the ``snapshot`` and the ``wrist`` at 64 px on the never-stopping
   belt. The policy in ``baselines/act-camera-tracking``.
-- ``camera-diffusion``: ``camera-snapshot``'s mix of demos, twice as many (96), at 64 px, learned by LeRobot's diffusion policy predicting
-  the actions (not the noise), denoised in 10 DDIM steps, its weights stored in float16 (a 25 MB file).
+- ``camera-diffusion``: ``camera-snapshot``'s mix of demos, twice as many (96), at 64 px, learned by LeRobot's
+  diffusion policy predicting the actions (not the noise), denoised in 10 DDIM steps, its weights stored in float16
+  (a 25 MB file), its checkpoint chosen on 20 validation episodes of each training variant.
 - ``camera-large``: the ``snapshot`` and ``wrist`` cameras at 128 px for LeRobot's ACT size, on a GPU.
 
 Why each preset is what it is, with the measurements: docs/baselines.md.
@@ -361,7 +362,7 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
                         perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75))),
            SNAPSHOT_DIFFUSION, TrainSettings(steps=4000, save_every=2000, seeds=(1001, 1000, 1002), batch_size=32,
                                              weights="float16"),
-           EvalSettings(select_episodes=10)),
+           EvalSettings(select_episodes=20)),
     Recipe("camera-large",
            DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot", "wrist"), image_size=128,
                         perturbations=(LatePass(100),)),
