@@ -17,7 +17,7 @@ fields; ``Recipe`` checks how they fit together. Every field is a ``colorsort-ba
   ray, held until the next). The policy in ``baselines/act-camera-snapshot``.
 - ``camera-tracking``: the live ``sensor``, the ``snapshot`` and the ``wrist`` at 64 px on the never-stopping
   belt. The policy in ``baselines/act-camera-tracking``.
-- ``camera-diffusion``: ``camera-snapshot``'s mix of demos, twice as many (96), at 64 px, learned by LeRobot's
+- ``camera-diffusion``: ``camera-snapshot``'s mix of demos, three times as many (144), at 64 px, learned by LeRobot's
   diffusion policy predicting the actions (not the noise), denoised in 10 DDIM steps, its weights stored in float16
   (a 25 MB file), its checkpoint chosen on 20 validation episodes of each training variant.
 - ``camera-large``: the ``snapshot`` and ``wrist`` cameras at 128 px for LeRobot's ACT size, on a GPU.
@@ -358,7 +358,7 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
            TRACKING_ACT, TrainSettings(steps=3600, save_every=1200, seeds=(1001, 1000, 1002), batch_size=32),
            EvalSettings(main_variant="tracking", variants=TRACKING_VARIANTS, select_episodes=10)),
     Recipe("camera-diffusion",
-           DemoSettings(train_mix=CAMERA_MIX, counts=(96,), cameras=("snapshot",), image_size=64,
+           DemoSettings(train_mix=CAMERA_MIX, counts=(144,), cameras=("snapshot",), image_size=64,
                         perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75))),
            SNAPSHOT_DIFFUSION, TrainSettings(steps=4000, save_every=2000, seeds=(1001, 1000, 1002), batch_size=32,
                                              weights="float16"),
