@@ -288,6 +288,50 @@ def test_a_dagger_round_adds_the_experts_labels_of_the_policys_states_and_trains
     assert all(f"reusing {p}" in again for p in (labels, merged, second[0]))
 
 
+@pytest.mark.slow
+def test_a_finetuning_dagger_round_trains_the_policy_that_played_further(tmp_path, in_process, capsys):
+    """--dagger.retrain=finetune --dagger.updates=1, tiny, on the belt that never stops: the round's lerobot-train
+    starts from the weights of the checkpoint that played (``--policy.path``; one Adam update moves no weight by
+    much more than the learning rate, where a new policy's weights are its own), trains for the round's updates on
+    the demos and the labels, is named after the checkpoint it started from, and is the one scored; the table calls
+    it fine-tuned and its minutes count both trainings."""
+    from safetensors.torch import load_file
+
+    out = tmp_path / "finetune"
+    argv = ["--recipe", "state-tracking", "--demos.counts=1", "--demos.train_mix=tracking:1",
+            "--demos.boxes_per_episode=1", "--training.steps=2", "--training.seeds=1000", "--training.batch_size=2",
+            "--training.num_workers=0", "--dagger.rounds=1", "--dagger.episodes=1", "--dagger.handover=5:5",
+            "--dagger.retrain=finetune", "--dagger.updates=1", "--evaluation.variants=tracking",
+            "--evaluation.episodes=1", "--evaluation.curve_episodes=1", "--evaluation.episode_length=5",
+            "--workers", "1", "--envs", "1", "--out", str(out)]
+    status, printed = baseline_main(argv, capsys)
+    assert status == 0, printed[-3000:]
+    (demos,) = (out / "data").glob("demos-1-????????")
+    (merged,) = (out / "data").glob("demos-1-dagger1-*")
+    (first,) = (out / "train").glob(f"{demos.name}-2steps-*-seed1000")
+    (second,) = (out / "train").glob(f"{merged.name}-1steps-*-seed1000")
+    played = first / "checkpoints" / "last" / "pretrained_model"
+    tuned = second / "checkpoints" / "last" / "pretrained_model"
+    config = json.loads((tuned / "train_config.json").read_text())
+    assert config["policy"]["pretrained_path"] == str(played) and config["steps"] == 1
+    assert json.loads(second.with_name(second.name + ".json").read_text())["settings"]["from"] == first.name
+    before, after = (load_file(m / "model.safetensors") for m in (played, tuned))
+    lr = config["policy"]["optimizer_lr"]
+    moved = max(float((after[k] - before[k]).abs().max()) for k in before)
+    assert 0 < moved < 5 * lr  # one update from the played weights (a fresh initialisation differs by ~0.1)
+    results = json.loads((out / "results.json").read_text())
+    (row,) = results["rows"]
+    assert row["steps"] == 1 and results["recipe"]["dagger"]["retrain"] == "finetune"
+    walls = [json.loads(run.with_name(run.name + ".json").read_text())["wall_s"] for run in (first, second)]
+    assert row["train_minutes"] == pytest.approx(sum(walls) / 60, abs=0.01)
+    assert list((out / "eval").glob(f"{second.name}-*-tracking-*.json"))
+    assert "ACT + DAgger (1 round, fine-tuned), state" in printed
+    with pytest.raises(ValueError, match=r"\['scratch', 'finetune'\]"):
+        get_recipe("state-tracking", {"dagger.rounds": 1, "dagger.retrain": "warm"})
+    with pytest.raises(ValueError, match="updates=-1"):
+        get_recipe("state-tracking", {"dagger.rounds": 1, "dagger.updates": -1})
+
+
 def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):
     """Each seed's run has a timing file of its own (a learning curve measures minutes from that run's start)."""
     from colorsort.training import stages
@@ -511,8 +555,9 @@ def fake_stages(monkeypatch, successes, minutes_each) -> list[tuple[str, str, in
                 "mean_cycle_time_s": 2.0, "per_episode": [{"success": k < won, "correct": 3 * (k < won),
                                                            "misplaced": 0, "dropped": 0} for k in range(n)]}
 
-    def fake_train(recipe, data, steps, seed, out):
-        run_dir = out / "train" / f"{data.name}-{steps}steps-seed{seed}"
+    def fake_train(recipe, data, steps, seed, out, init=None):
+        start = "" if init is None else f"-from-{stages.checkpoint_name(init)}"
+        run_dir = out / "train" / f"{data.name}-{steps}steps{start}-seed{seed}"
         fake_run(run_dir, steps, None, started=1e9, seconds_each=minutes_each(seed))
         return run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
 

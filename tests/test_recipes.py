@@ -219,7 +219,8 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     recipe = get_recipe("state", {"dagger.rounds": 2, "dagger.episodes": 4, "dagger.handover": (10, 50)})
     assert recipe.label == "ACT + DAgger (2 rounds), state"
     stored = recipe.to_json()
-    assert stored["dagger"] == {"rounds": 2, "episodes": 4, "handover": [10, 50], "rollout": "last"}
+    assert stored["dagger"] == {"rounds": 2, "episodes": 4, "handover": [10, 50], "rollout": "last",
+                                "retrain": "scratch", "updates": 0}
     assert label(Results.from_json(scores([], stored))) == "ACT + DAgger (2 rounds), state"
     parser = argparse.ArgumentParser()
     add_recipe_flags(parser, recipe)

@@ -8,12 +8,16 @@ from dataclasses import dataclass
 from colorsort.errors import ConfigError
 
 
-def with_dagger(method: str, rounds: int) -> str:
-    """A method's name in tables, with DAgger's rounds where it ran them: "ACT + DAgger (2 rounds)"."""
-    return f"{method} + DAgger ({rounds} round{'s' * (rounds > 1)})" if rounds else method
+def with_dagger(method: str, rounds: int, retrain: str = "scratch") -> str:
+    """A method's name in tables, with DAgger's rounds where it ran them: "ACT + DAgger (2 rounds)", "ACT + DAgger
+    (1 round, fine-tuned)"."""
+    if not rounds:
+        return method
+    return f"{method} + DAgger ({rounds} round{'s' * (rounds > 1)}{', fine-tuned' * (retrain == 'finetune')})"
 
 
 ROLLOUTS = ("last", "chosen")
+RETRAINS = ("scratch", "finetune")
 
 
 @dataclass(frozen=True)
@@ -21,8 +25,8 @@ class DaggerSettings:
     """DAgger (Ross et al., 2011) after behaviour cloning: rounds of "the policy drives, the expert labels the
     states it reached, the labels join the training set, the policy is trained again" (``colorsort-takeover``
     records a round's labels). Each round trains a new policy from scratch on the demos and every round's labels,
-    for the recipe's updates and seeds; the last round's policy is the one scored. Only the largest demo set runs
-    rounds.
+    for the recipe's updates and seeds (or, with ``retrain="finetune"``, trains the policy that played further);
+    the last round's policy is the one scored. Only the largest demo set runs rounds.
 
     Attributes:
         rounds: rounds after the first training; 0: behaviour cloning alone.
@@ -33,12 +37,18 @@ class DaggerSettings:
         rollout: which checkpoint of a round's policy plays: "last", or "chosen", the one validation seeds
             choose (``evaluation.select_episodes``) as for scoring; a policy's checkpoints can differ by more
             than the methods do.
+        retrain: how a round's policy is trained on the grown set: "scratch", a new policy from scratch; "finetune",
+            the weights of the checkpoint that played trained further (``lerobot-train --policy.path``; the
+            optimizer starts afresh).
+        updates: [updates] each round's training; 0: the recipe's (``training.steps``).
     """
 
     rounds: int = 0
     episodes: int = 10
     handover: tuple[int, int] = (20, 200)
     rollout: str = "last"
+    retrain: str = "scratch"
+    updates: int = 0
 
     def __post_init__(self) -> None:
         if self.rounds < 0:
@@ -50,3 +60,7 @@ class DaggerSettings:
             raise ConfigError(f"handover={self.handover}: give FIRST:LAST steps with 0 <= FIRST <= LAST")
         if self.rollout not in ROLLOUTS:
             raise ConfigError(f"rollout={self.rollout!r}: give one of {list(ROLLOUTS)}")
+        if self.retrain not in RETRAINS:
+            raise ConfigError(f"retrain={self.retrain!r}: give one of {list(RETRAINS)}")
+        if self.updates < 0:
+            raise ConfigError(f"updates={self.updates}: give 0 (the recipe's training.steps) or more")

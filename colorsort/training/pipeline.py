@@ -75,7 +75,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
             run_dir, timing = stages.train(recipe, data, steps, seed, out)
             trained_frames = frames
             if largest and recipe.dagger.rounds:
-                run_dir, timing, trained_on = dagger(recipe, settings, n, data, run_dir, timing, steps, seed)
+                run_dir, timing, trained_on, steps = dagger(recipe, settings, n, data, run_dir, timing, steps, seed)
                 trained_frames = stages.size(trained_on)[1]  # the demos' and the expert's labels
             if settings.until == "train":
                 continue
@@ -119,27 +119,31 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
 
 
 def dagger(recipe: Recipe, settings: RunSettings, n: int, data: Path, run_dir: Path, timing: dict, steps: int,
-           seed: int) -> tuple[Path, dict, Path]:
+           seed: int) -> tuple[Path, dict, Path, int]:
     """DAgger's rounds after the first training (``recipe.dagger``): each round's policy (its last checkpoint, or
     with ``rollout="chosen"`` the one validation seeds choose) plays every training variant, the expert labels the
-    states it reached, the labels join the training set and a new policy is trained on it from scratch. The last
-    round's run, its timing and its training set.
+    states it reached, the labels join the training set and a policy is trained on it for the round's updates:
+    a new one from scratch, or with ``retrain="finetune"`` the one that played, further. The last round's run, its
+    timing, its training set and its updates.
 
     The timing counts every round's training: its wall time is their sum, and its start is moved back by the earlier
     rounds' training, so that a checkpoint's minutes (``stages.checkpoints``) are all the training behind it."""
-    out = settings.out
+    out, rounds = settings.out, recipe.dagger
+    round_steps = rounds.updates or steps
     earlier_s = 0.0
-    for round_ in range(1, recipe.dagger.rounds + 1):
+    for round_ in range(1, rounds.rounds + 1):
         earlier_s += timing["wall_s"]
         model = run_dir / "checkpoints" / "last" / "pretrained_model"
-        if recipe.dagger.rollout == "chosen":
+        if rounds.rollout == "chosen":
             model = choose(recipe, settings, run_dir, timing, steps)[0]
         labels = [stages.label(recipe, model, variant, k, round_, out)
                   for k, variant in enumerate(recipe.demos.train_variants)]
         data = stages.add_labels(recipe, data, labels, f"demos-{n}-dagger{round_}", out)
-        run_dir, timing = stages.train(recipe, data, steps, seed, out)
+        run_dir, timing = stages.train(recipe, data, round_steps, seed, out,
+                                       init=model if rounds.retrain == "finetune" else None)
+        steps = round_steps
     return run_dir, {**timing, "started": timing["started"] - earlier_s,
-                     "wall_s": round(earlier_s + timing["wall_s"], 1)}, data
+                     "wall_s": round(earlier_s + timing["wall_s"], 1)}, data, steps
 
 
 def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,

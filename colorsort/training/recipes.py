@@ -299,7 +299,7 @@ class Recipe:
 
     @property
     def label(self) -> str:
-        method = with_dagger(self.policy.name, self.dagger.rounds)
+        method = with_dagger(self.policy.name, self.dagger.rounds, self.dagger.retrain)
         return f"{method}, {'+'.join(self.demos.cameras) if self.demos.cameras else 'state'}"
 
     def override(self, changes: dict[str, Any]) -> Recipe:

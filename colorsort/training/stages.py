@@ -7,7 +7,8 @@ Layout of the working folder ``out``::
     data/demos-<N>-<key>/     the training set: the parts merged (cameras: box state removed)
     data/labels-<variant>-r<R>-<key>/  colorsort-takeover's expert labels of DAgger round R on one variant
     data/demos-<N>-dagger<R>-<key>/  round R's training set: round R-1's with round R's labels merged
-    train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K; <run>.json its
+    train/demos-<N>-<key>-<S>steps-<key>-seed<K>/  lerobot-train's run of S updates with seed K (from scratch, or
+                              from a checkpoint's weights, named in the settings key); <run>.json its
                               timing and settings; under a constant rate, the first S updates of a longer run;
                               <run>.running.json while it trains (an interrupted run resumes from its last checkpoint)
                               with training.weights=float16 its checkpoints rounded, with training.average=k each
@@ -185,21 +186,25 @@ def size(data: Path) -> tuple[int, int]:
     return info["total_episodes"], info["total_frames"]
 
 
-def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Path) -> list[str]:
-    """``lerobot-train`` of the recipe's policy on ``data`` for ``steps`` updates with ``seed`` into ``run_dir``."""
+def train_command(recipe: Recipe, data: Path, steps: int, seed: int, run_dir: Path,
+                  init: Path | None = None) -> list[str]:
+    """``lerobot-train`` of the recipe's policy on ``data`` for ``steps`` updates with ``seed`` into ``run_dir``;
+    from scratch, or with ``init`` (a checkpoint's ``pretrained_model``) from its weights (``--policy.path``)."""
     training = recipe.training
     save_every = training.save_every if 0 < training.save_every < steps else steps
+    policy = f"--policy.type={recipe.policy.type}" if init is None else f"--policy.path={init}"
     return [str(BIN / "lerobot-train"), f"--dataset.repo_id={REPO_ID}", f"--dataset.root={data}",
-            f"--policy.type={recipe.policy.type}", f"--policy.device={training.device}", "--policy.push_to_hub=false",
+            policy, f"--policy.device={training.device}", "--policy.push_to_hub=false",
             *recipe.policy.args(recipe.demos.image_size), *training.augment_args(),
             f"--batch_size={training.batch_size}", f"--steps={steps}", f"--save_freq={save_every}", "--log_freq=200",
             f"--num_workers={training.num_workers}", f"--seed={seed}", "--wandb.enable=false",
             f"--output_dir={run_dir}"]
 
 
-def train_settings(recipe: Recipe) -> dict:
+def train_settings(recipe: Recipe, init: Path | None = None) -> dict:
     """What a training run's weights depend on beside its data, length and seed: ``lerobot-train``'s arguments
-    (the inference settings aside: they change how a policy acts, not what it learns; ``set_inference``)."""
+    (the inference settings aside: they change how a policy acts, not what it learns; ``set_inference``), and the
+    checkpoint it starts from (``init``), by name."""
     inference = tuple(f"--policy.{k}=" for k in recipe.policy.inference())
     args = train_command(recipe, Path("DATA"), 1, 0, Path("RUN"))[1:]
     skip = ("--dataset.root=", "--steps=", "--save_freq=", "--seed=", "--output_dir=", *inference)
@@ -208,10 +213,12 @@ def train_settings(recipe: Recipe) -> dict:
         settings["weights"] = recipe.training.weights
     if recipe.training.average > 1:  # which checkpoints are averaged depends on how often they are saved
         settings["average"] = [recipe.training.average, recipe.training.save_every]
+    if init is not None:
+        settings["from"] = checkpoint_name(init)
     return settings
 
 
-def twins(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> list[Path]:
+def twins(recipe: Recipe, data: Path, steps: int, seed: int, out: Path, init: Path | None = None) -> list[Path]:
     """The runs of the same training whose checkpoints hold ``lerobot-train``'s own weights (float32, or float16 with
     the float32 file kept), from which a rounded or averaged run is copied instead of trained; none for a run that
     is one of them."""
@@ -221,12 +228,12 @@ def twins(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> list[
     plain = [{"training.weights": "float32", "training.average": 1}]
     if training.average > 1:
         plain.append({"training.weights": training.weights, "training.average": 1})
-    return [out / "train" / run_name(recipe.override(o), data, steps, seed) for o in plain]
+    return [out / "train" / run_name(recipe.override(o), data, steps, seed, init) for o in plain]
 
 
-def run_name(recipe: Recipe, data: Path, steps: int, seed: int) -> str:
+def run_name(recipe: Recipe, data: Path, steps: int, seed: int, init: Path | None = None) -> str:
     """A training run's folder name under ``train/``: its data, length, settings (``train_settings``) and seed."""
-    return f"{data.name}-{steps}steps-{cache.key(train_settings(recipe))}-seed{seed}"
+    return f"{data.name}-{steps}steps-{cache.key(train_settings(recipe, init))}-seed{seed}"
 
 
 def finished(run_dir: Path) -> bool:
@@ -235,12 +242,14 @@ def finished(run_dir: Path) -> bool:
             and run_dir.with_name(run_dir.name + ".json").is_file())
 
 
-def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple[Path, dict]:
-    """``lerobot-train``; the run folder and its timing (reused if there, resumed if interrupted).
+def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path,
+          init: Path | None = None) -> tuple[Path, dict]:
+    """``lerobot-train`` (from scratch, or from ``init``'s weights); the run folder and its timing (reused if there,
+    resumed if interrupted).
 
     The timing is ``{"started": unix time, "wall_s": s, "settings": ...}``, and ``"resumed"`` where the run was
     interrupted and resumed from its last checkpoint (``resume``): its gaps are not training time."""
-    run_dir = out / "train" / run_name(recipe, data, steps, seed)
+    run_dir = out / "train" / run_name(recipe, data, steps, seed, init)
     timing_path = run_dir.with_name(run_dir.name + ".json")  # not with_suffix: "-shift0.1-seed1000" has a dot
     running_path = run_dir.with_name(run_dir.name + ".running.json")
     if finished(run_dir):
@@ -248,7 +257,7 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
         set_inference(run_dir, recipe)
         return run_dir, json.loads(timing_path.read_text())
     weights, k = recipe.training.weights, recipe.training.average
-    for twin in twins(recipe, data, steps, seed, out):
+    for twin in twins(recipe, data, steps, seed, out, init):
         if (finished(twin) and not running_path.is_file()
                 and (k == 1 or saved_every(twin, recipe.training.save_every, steps))):
             mean = f", each the mean of the latest {k}" if k > 1 else ""
@@ -280,10 +289,10 @@ def train(recipe: Recipe, data: Path, steps: int, seed: int, out: Path) -> tuple
             timing_path.write_text(json.dumps(timing))
             set_inference(run_dir, recipe)
             return run_dir, timing
-        running = {"started": time.time(), "settings": train_settings(recipe), "resumed": []}
+        running = {"started": time.time(), "settings": train_settings(recipe, init), "resumed": []}
         run_dir.parent.mkdir(parents=True, exist_ok=True)
         running_path.write_text(json.dumps(running))
-        seconds = run(train_command(recipe, data, steps, seed, run_dir), log)
+        seconds = run(train_command(recipe, data, steps, seed, run_dir, init), log)
     average(run_dir, k)  # before the timing marks the run finished: every score is of the stored weights
     store(run_dir, weights)
     kept = sum(r["kept_s"] for r in running["resumed"])

@@ -47,8 +47,9 @@ def label(scores: Results) -> str:
 
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
     recipe = scores.recipe
-    rounds = recipe.get("dagger", {}).get("rounds", 0)  # stored only where a recipe ran DAgger's rounds
-    name = with_dagger(METHODS[recipe.get("policy", {"type": "act"})["type"]], rounds)
+    dagger = recipe.get("dagger", {})  # stored only where a recipe ran DAgger's rounds
+    name = with_dagger(METHODS[recipe.get("policy", {"type": "act"})["type"]], dagger.get("rounds", 0),
+                       dagger.get("retrain", "scratch"))
     cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
