@@ -40,7 +40,7 @@ class DaggerSettings:
         retrain: how a round's policy is trained on the grown set: "scratch", a new policy from scratch; "finetune",
             the weights of the checkpoint that played trained further (``lerobot-train --policy.path``; the
             optimizer starts afresh).
-        updates: [updates] each round's training; 0: the recipe's (``training.steps``).
+        updates: [updates] each round's training; 0: as many as the first training's (the recipe's).
     """
 
     rounds: int = 0
@@ -63,4 +63,4 @@ class DaggerSettings:
         if self.retrain not in RETRAINS:
             raise ConfigError(f"retrain={self.retrain!r}: give one of {list(RETRAINS)}")
         if self.updates < 0:
-            raise ConfigError(f"updates={self.updates}: give 0 (the recipe's training.steps) or more")
+            raise ConfigError(f"updates={self.updates}: give 0 (as many as the first training's) or more")
