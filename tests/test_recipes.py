@@ -31,7 +31,7 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
         assert arg in cmd
     assert "--policy.crop_shape=[29,29]" in train_command(get_recipe("camera-diffusion", {"demos.image_size": 32}),
                                                           tmp_path, 1, 1, tmp_path)
-    assert recipe.policy.execution == "chunk8-ddim10" and recipe.label.startswith("diffusion, ")
+    assert recipe.policy.execution == "chunk8-ddim10" and recipe.label.startswith("Diffusion Policy, ")
     assert not any(a.startswith("--policy.type=act") or "dim_model" in a for a in cmd)
     with pytest.raises(ValueError, match="multiple of"):
         DiffusionSettings(horizon=10)
@@ -231,6 +231,20 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
                           ({"dagger.handover": (50, 10)}, "FIRST:LAST")):
         with pytest.raises(ValueError, match=named):
             get_recipe("state", change)
+
+
+def test_averaged_checkpoints_name_the_method_and_leave_its_inputs_apart():
+    from colorsort.training.methods import method_name
+    from colorsort.training.records import Results
+    from colorsort.training.tables import label
+
+    recipe = get_recipe("camera-tracking", {"training.average": 2})
+    assert recipe.label == "ACT (mean of 2 checkpoints), sensor+snapshot+wrist"
+    assert label(Results.from_json(scores([], recipe.to_json()))) == recipe.label
+    method, _, inputs = recipe.label.partition(", ")  # how the methods table splits a label
+    assert (method, inputs) == ("ACT (mean of 2 checkpoints)", "sensor+snapshot+wrist")
+    assert method_name("act", 1, "finetune", 3) == "ACT (mean of 3 checkpoints) + DAgger (1 round, fine-tuned)"
+    assert get_recipe("camera-diffusion").label.startswith("Diffusion Policy, ")
 
 
 def test_recipes_split_demos_by_weight_and_never_give_a_camera_policy_the_box_state():

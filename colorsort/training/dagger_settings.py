@@ -8,14 +8,6 @@ from dataclasses import dataclass
 from colorsort.errors import ConfigError
 
 
-def with_dagger(method: str, rounds: int, retrain: str = "scratch") -> str:
-    """A method's name in tables, with DAgger's rounds where it ran them: "ACT + DAgger (2 rounds)", "ACT + DAgger
-    (1 round, fine-tuned)"."""
-    if not rounds:
-        return method
-    return f"{method} + DAgger ({rounds} round{'s' * (rounds > 1)}{', fine-tuned' * (retrain == 'finetune')})"
-
-
 ROLLOUTS = ("last", "chosen")
 RETRAINS = ("scratch", "finetune")
 

@@ -2,7 +2,7 @@
 
 Both kinds answer the same questions, so the pipeline never asks which one it holds:
 
-- ``type``: ``lerobot-train --policy.type``; ``name``: the label in tables ("ACT", "diffusion");
+- ``type``: ``lerobot-train --policy.type`` (its name in tables: ``colorsort.training.methods``);
 - ``args(image_size)``: the ``--policy.<name>=<value>`` arguments (and any optimizer ones);
 - ``inference()``: the settings that change how a trained policy acts but not what it learns;
 - ``execution``: how its action chunks are executed, for file names (``chunk10``, ``ens0.01``);
@@ -51,7 +51,6 @@ class ActSettings:
     lr_schedule: str = "constant"  # LeRobot's ACT preset; "cosine": warm up, then anneal to 0 at the last update
     warmup_steps: int = 200  # updates of linear warm-up before the cosine [updates]
     type: str = field(default="act", init=False)  # lerobot-train's --policy.type
-    name = "ACT"  # in tables
 
     def __post_init__(self) -> None:
         if self.lr_schedule not in LR_SCHEDULES:
@@ -130,7 +129,6 @@ class DiffusionSettings:
     scheduler_warmup_steps: int = 500  # updates of linear warm-up [updates]
     crop_fraction: float = 0.9  # the crop's side as a fraction of the image's
     type: str = field(default="diffusion", init=False)  # lerobot-train's --policy.type
-    name = "diffusion"  # in tables
 
     def __post_init__(self) -> None:
         if not 1 <= self.n_action_steps <= self.horizon - self.n_obs_steps + 1:

@@ -37,7 +37,8 @@ from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
-from colorsort.training.dagger_settings import DaggerSettings, with_dagger
+from colorsort.training.dagger_settings import DaggerSettings
+from colorsort.training.methods import method_name
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SNAPSHOT_DIFFUSION, TRACKING_ACT, PolicySettings
 from colorsort.training.weights import WEIGHTS
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, VARIANTS, get_variant
@@ -299,7 +300,7 @@ class Recipe:
 
     @property
     def label(self) -> str:
-        method = with_dagger(self.policy.name, self.dagger.rounds, self.dagger.retrain)
+        method = method_name(self.policy.type, self.dagger.rounds, self.dagger.retrain, self.training.average)
         return f"{method}, {'+'.join(self.demos.cameras) if self.demos.cameras else 'state'}"
 
     def override(self, changes: dict[str, Any]) -> Recipe:

@@ -30,7 +30,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training.dagger_settings import with_dagger
+from colorsort.training.methods import method_name
 from colorsort.training.records import Results, ScoreRow
 from colorsort.training.report import curve_table, scored_checkpoints, span, summary_table
 
@@ -38,7 +38,6 @@ KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
 
 
-METHODS = {"act": "ACT", "diffusion": "Diffusion Policy"}  # LeRobot's policy type -> the method's name
 MACHINES = {"cpu": "on the CPU", "cuda": "on a GPU", "mps": "on Apple's GPU"}
 
 
@@ -48,8 +47,8 @@ def label(scores: Results) -> str:
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
     recipe = scores.recipe
     dagger = recipe.get("dagger", {})  # stored only where a recipe ran DAgger's rounds
-    name = with_dagger(METHODS[recipe.get("policy", {"type": "act"})["type"]], dagger.get("rounds", 0),
-                       dagger.get("retrain", "scratch"))
+    name = method_name(recipe.get("policy", {"type": "act"})["type"], dagger.get("rounds", 0),
+                       dagger.get("retrain", "scratch"), section(scores, "training").get("average", 1))
     cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
