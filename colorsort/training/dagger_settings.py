@@ -7,7 +7,6 @@ from dataclasses import dataclass
 
 from colorsort.errors import ConfigError
 
-
 ROLLOUTS = ("last", "chosen")
 RETRAINS = ("scratch", "finetune")
 
