@@ -646,6 +646,39 @@ def test_a_dagger_round_rolls_out_the_last_checkpoint_or_the_one_validation_choo
         get_recipe("state-tracking", {**flags, "dagger.rollout": "best"})
 
 
+def test_a_dagger_round_plays_only_the_variants_it_names_with_their_own_takeover_seeds(tmp_path, monkeypatch):
+    """dagger.variants=("tracking-jitter",) on a two-variant mix: the round's takeover plays that variant alone,
+    as the second training variant (so with the seeds it has when both are played), and its labels alone join."""
+    from colorsort.training import pipeline
+
+    fake_stages(monkeypatch, lambda seed, step, validating: 2, lambda seed: 60)
+    played: list[tuple[str, int]] = []
+    joined: list[list[str]] = []
+
+    def fake_label(recipe, model, variant, k, round_, out):
+        played.append((variant, k))
+        return out / "data" / f"labels-{variant}-r{round_}"
+
+    def fake_add_labels(recipe, data, labels, stem, out):
+        joined.append([p.name for p in labels])
+        return out / "data" / stem
+
+    monkeypatch.setattr(stages, "label", fake_label)
+    monkeypatch.setattr(stages, "add_labels", fake_add_labels)
+    flags = {"demos.counts": (4,), "demos.train_mix": (("tracking", 1), ("tracking-jitter", 1)),
+             "training.steps": 2, "training.seeds": (1000,), "evaluation.variants": ("tracking",),
+             "evaluation.episodes": 4, "dagger.rounds": 1}
+    for variants, expected in (((), [("tracking", 0), ("tracking-jitter", 1)]),
+                               (("tracking-jitter",), [("tracking-jitter", 1)])):
+        played.clear()
+        joined.clear()
+        recipe = get_recipe("state-tracking", {**flags, "dagger.variants": variants})
+        pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / (variants[0] if variants else "all"), envs=1),
+                              "cmd")
+        assert played == expected
+        assert joined == [[f"labels-{v}-r1" for v, _ in expected]]
+
+
 def test_a_baseline_stored_before_a_setting_existed_takes_seeds_of_its_recipe_at_that_settings_default():
     """act-camera-tracking-dagger's scores.json predates dagger.rollout: a later seed of its own recipe may join it
     (the setting ran as its default, "last"), and a run with rollout="chosen" may not."""

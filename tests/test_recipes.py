@@ -220,7 +220,7 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     assert recipe.label == "ACT + DAgger (2 rounds), state"
     stored = recipe.to_json()
     assert stored["dagger"] == {"rounds": 2, "episodes": 4, "handover": [10, 50], "rollout": "last",
-                                "retrain": "scratch", "updates": 0}
+                                "retrain": "scratch", "updates": 0, "variants": []}
     assert label(Results.from_json(scores([], stored))) == "ACT + DAgger (2 rounds), state"
     parser = argparse.ArgumentParser()
     add_recipe_flags(parser, recipe)
@@ -231,6 +231,12 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
                           ({"dagger.handover": (50, 10)}, "FIRST:LAST")):
         with pytest.raises(ValueError, match=named):
             get_recipe("state", change)
+    tracking = get_recipe("camera-tracking")
+    add_recipe_flags(parser := argparse.ArgumentParser(), tracking)
+    args = parser.parse_args(["--dagger.variants=tracking-jitter"])
+    assert recipe_changes(args, tracking) == {"dagger.variants": ("tracking-jitter",)}
+    with pytest.raises(ValueError, match=r"\['fast'\].*\['tracking', 'tracking-jitter'\]"):
+        get_recipe("camera-tracking", {"dagger.rounds": 1, "dagger.variants": ("fast",)})
 
 
 def test_averaged_checkpoints_name_the_method_and_leave_its_inputs_apart():

@@ -32,6 +32,8 @@ class DaggerSettings:
             the weights of the checkpoint that played trained further (``lerobot-train --policy.path``; the
             optimizer starts afresh).
         updates: [updates] each round's training; 0: as many as the first training's (the recipe's).
+        variants: the training variants the policy plays in each round (their labels join the set); empty: every
+            training variant. A variant keeps its takeover seeds whichever others are played.
     """
 
     rounds: int = 0
@@ -40,6 +42,7 @@ class DaggerSettings:
     rollout: str = "last"
     retrain: str = "scratch"
     updates: int = 0
+    variants: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.rounds < 0:

@@ -137,7 +137,8 @@ def dagger(recipe: Recipe, settings: RunSettings, n: int, data: Path, run_dir: P
         if rounds.rollout == "chosen":
             model = choose(recipe, settings, run_dir, timing, steps)[0]
         labels = [stages.label(recipe, model, variant, k, round_, out)
-                  for k, variant in enumerate(recipe.demos.train_variants)]
+                  for k, variant in enumerate(recipe.demos.train_variants)
+                  if not rounds.variants or variant in rounds.variants]
         data = stages.add_labels(recipe, data, labels, f"demos-{n}-dagger{round_}", out)
         run_dir, timing = stages.train(recipe, data, round_steps, seed, out,
                                        init=model if rounds.retrain == "finetune" else None)

@@ -273,6 +273,10 @@ class Recipe:
         if (self.training.image_shift or self.training.image_relight) and not self.demos.cameras:
             raise ConfigError("training.image_shift and training.image_relight change camera images: give "
                               "demos.cameras, or turn them off")
+        unknown = [v for v in self.dagger.variants if v not in self.demos.train_variants]
+        if unknown:
+            raise ConfigError(f"dagger.variants {unknown}: give training variants of this recipe, "
+                              f"{list(self.demos.train_variants)} (or none: all of them)")
         if self.dagger.rollout == "chosen" and not self.evaluation.select_episodes:
             raise ConfigError("dagger.rollout='chosen' plays the checkpoint validation seeds choose, and "
                               "evaluation.select_episodes=0 chooses none: give select_episodes, or rollout='last'")
