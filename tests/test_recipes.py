@@ -237,6 +237,14 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     assert recipe_changes(args, tracking) == {"dagger.variants": ("tracking-jitter",)}
     with pytest.raises(ValueError, match=r"\['fast'\].*\['tracking', 'tracking-jitter'\]"):
         get_recipe("camera-tracking", {"dagger.rounds": 1, "dagger.variants": ("fast",)})
+    from colorsort.training.ship import dagger_line
+
+    assert "the last policy played 4 episodes of every training variant" in dagger_line(recipe, 100)
+    assert "a new policy was trained from scratch" in dagger_line(recipe, 100)
+    told = dagger_line(get_recipe("camera-tracking", {"dagger.rounds": 1, "dagger.variants": ("tracking-jitter",),
+                                                       "dagger.rollout": "chosen", "dagger.retrain": "finetune"}), 100)
+    assert "checkpoint chosen on validation seeds played 10 episodes of `tracking-jitter`," in told
+    assert "the policy that played was trained further" in told
 
 
 def test_averaged_checkpoints_name_the_method_and_leave_its_inputs_apart():

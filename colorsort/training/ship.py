@@ -67,9 +67,12 @@ def dagger_line(recipe: Recipe, frames: int) -> str:
     if not d.rounds:
         return ""
     played = ", ".join(f"`{v}`" for v in d.variants) if d.variants else "every training variant"
-    return (f" Then {d.rounds} DAgger round{'s' * (d.rounds > 1)}: each time the last policy played {d.episodes} "
+    driver = "the last policy" if d.rollout == "last" else "the last policy's checkpoint chosen on validation seeds"
+    trained = ("a new policy was trained from scratch" if d.retrain == "scratch"
+               else "the policy that played was trained further")
+    return (f" Then {d.rounds} DAgger round{'s' * (d.rounds > 1)}: each time {driver} played {d.episodes} "
             f"episodes of {played}, the expert took over after {d.handover[0]}-{d.handover[1]} steps "
-            f"and labelled the states it reached (`colorsort-takeover`), and a new policy was trained from scratch "
+            f"and labelled the states it reached (`colorsort-takeover`), and {trained} "
             f"on the demos and every round's labels ({frames} frames in all); the minutes count every round's "
             f"training.")
 
