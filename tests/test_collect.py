@@ -122,6 +122,26 @@ def test_resume_without_the_turn_is_refused_and_older_datasets_resume_as_before(
         collect(CollectConfig(out=str(copy), resume=True, **{**TINY, "turn_to_box": False}), progress=False)
 
 
+def test_the_experts_changed_settings_are_a_setting_of_the_data(tiny_dataset, tmp_path, capsys):
+    """``--expert`` changes the recording expert's settings, is recorded (absent when unset, as in older datasets)
+    and checked on resume; a name it cannot change or a value out of range is refused naming the valid ones."""
+    deeper = CollectConfig(**TINY, preset="tracking", expert=(("press", 0.01), ("track_hold_time", 0.15)))
+    assert (deeper.expert_config.press, deeper.expert_config.track_hold_time) == (0.01, 0.15)
+    assert deeper.expert_config.track_descend_time == CollectConfig(**TINY, preset="tracking").expert_config \
+        .track_descend_time  # the rest is the tracking belt's preset
+    assert deeper.settings()["expert"] == [["press", 0.01], ["track_hold_time", 0.15]]
+    assert "expert" not in CollectConfig(**TINY).settings()
+    copy = tmp_path / "copy"
+    shutil.copytree(tiny_dataset, copy)
+    with pytest.raises(ValueError, match="expert"):
+        collect(CollectConfig(out=str(copy), resume=True, **TINY, expert=(("press", 0.01),)), progress=False)
+    with pytest.raises(ValueError, match="valid names: .*'track_hold_time'"):
+        CollectConfig(**TINY, expert=(("hold", 0.15),))
+    assert exit_status(main, ["--expert", "press:0.5", "--out", str(tmp_path / "new")]) == 2
+    assert "press=0.5 is out of range" in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()
+
+
 @pytest.mark.slow
 def test_interrupted_run_keeps_finished_episodes_and_resume_completes_it(tiny_dataset, tmp_path, monkeypatch):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset

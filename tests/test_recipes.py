@@ -387,6 +387,38 @@ def test_a_shipped_readme_says_how_the_demos_were_made():
     assert demo_line(get_recipe("state", {"demos.late_pass": LatePass(0), "demos.late_pick": LatePick(5)})) == (
         "8 on default, 8 on jitter, 8 on fast, 16 on distractors; 3 boxes each; every pick held back 0-5 steps")
     assert demo_line(get_recipe("camera-tracking")) == "24 on tracking, 24 on tracking-jitter; 5 boxes each"
+    deeper = get_recipe("camera-tracking", {"demos.expert": (("press", 0.01), ("track_hold_time", 0.15))})
+    assert demo_line(deeper).endswith("; the expert's press 0.01, track_hold_time 0.15 (`ExpertConfig`, changed "
+                                      "from its preset)")
+
+
+def test_the_experts_changed_settings_reach_the_demos_and_daggers_labels_and_key_their_caches(tmp_path, monkeypatch):
+    """``--demos.expert`` reaches colorsort-collect of every training variant and colorsort-takeover, as their
+    ``--expert``, so the demos and the labels come from one expert and no cache of the preset's is reused; an
+    unknown setting or a value out of range is refused with the valid choices."""
+    from colorsort.training import stages
+    from colorsort.training.stages import collect_command, label, part_settings
+
+    _, recipe = colorsort_baseline.parse_args(
+        ["--recipe", "camera-tracking", "--demos.expert=press:0.01,track_hold_time:0.15"])
+    assert recipe.demos.expert == (("press", 0.01), ("track_hold_time", 0.15))
+    preset = get_recipe("camera-tracking")
+    for k, variant in enumerate(recipe.demos.train_variants):
+        command = collect_command(recipe, variant, k, 24, 2)
+        assert "--expert=press:0.01,track_hold_time:0.15" in command
+        assert part_settings(command) != part_settings(collect_command(preset, variant, k, 24, 2))
+        assert not any(a.startswith("--expert") for a in collect_command(preset, variant, k, 24, 2))
+    ran: list[list[str]] = []
+    monkeypatch.setattr(stages, "run", lambda command, log: ran.append(command))  # what it would run, not a run
+    model = tmp_path / "train" / "run" / "checkpoints" / "last" / "pretrained_model"
+    labels = [label(r, model, "tracking-jitter", 1, 1, tmp_path) for r in (recipe, preset)]
+    assert labels[0] != labels[1]
+    assert "--expert=press:0.01,track_hold_time:0.15" in ran[0]
+    assert not any(a.startswith("--expert") for a in ran[1])  # the preset's labels keep the key they had
+    with pytest.raises(ValueError, match="track_hold_time"):
+        colorsort_baseline.parse_args(["--recipe", "camera-tracking", "--demos.expert=hold:0.15"])
+    with pytest.raises(ValueError, match=r"press=0.5 is out of range"):
+        colorsort_baseline.parse_args(["--recipe", "camera-tracking", "--demos.expert=press:0.5"])
 
 
 def test_every_recipes_policy_arguments_are_ones_lerobot_accepts():

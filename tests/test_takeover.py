@@ -4,7 +4,7 @@ bin of its colour."""
 
 import numpy as np
 import pytest
-from helpers import move_to
+from helpers import exit_status, move_to
 from test_expert import assert_all_in_their_bins, make_expert_env, run_until
 
 from colorsort.cell.privileged import TakeOver, take_over_view
@@ -203,3 +203,19 @@ def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_
     assert main(argv) == 2 and "never overwritten" in capsys.readouterr().err
     with pytest.raises(ValueError, match="handover"):
         TakeoverConfig(policy="p", out="o", handover=(60, 30))
+
+
+def test_the_expert_that_takes_over_is_the_one_that_made_the_demos():
+    """``--expert`` (``TakeoverConfig.expert``) changes the taking-over expert's settings from its belt's preset, as
+    colorsort-collect's does the demos'; a name it cannot change is refused naming the valid ones."""
+    from colorsort.cli.takeover import main
+    from colorsort.expert.config import TRACKING_EXPERT
+    from colorsort.training.takeover import TakeoverConfig
+
+    deeper = TakeoverConfig(policy="p", out="o", variant="tracking-jitter", expert=(("press", 0.01),))
+    assert deeper.expert_config.press == 0.01
+    assert deeper.expert_config.track_descend_time == TRACKING_EXPERT.track_descend_time
+    assert TakeoverConfig(policy="p", out="o", variant="tracking").expert_config == TRACKING_EXPERT
+    with pytest.raises(ValueError, match="valid names: .*'press'"):
+        TakeoverConfig(policy="p", out="o", expert=(("hold", 0.15),))
+    assert exit_status(main, ["--policy", "p", "--out", "o", "--expert", "press"]) == 2

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from colorsort.expert.base import Cycle
+from colorsort.expert.config import TRACKING_EXPERT, changed
 from colorsort.expert.factory import make_expert
 from colorsort.expert.tracking import Sighting, TrackingExpert
 from colorsort.variants import get_variant
@@ -41,6 +42,27 @@ def test_the_tracking_expert_picks_moving_boxes_and_places_them_in_their_bins(ro
     assert [e.outcome for e in env.events[:4]] == ["placed"] * 4, env.events
     assert belt_stopped == 0 and expert.let_go == 0
     assert env.events[3].time < 4 * env.config.spawn_period + 5.0  # it keeps pace with the spawner
+
+
+def test_a_longer_hold_keeps_the_sealed_box_on_the_moving_belt_for_it_and_every_box_still_lands(make_env):
+    """The expert's ``track_hold_time`` and ``press``, changed from the preset as ``--expert`` changes them, are
+    what the cup does: sealed, it holds each box down on the moving belt for one control step (0.05 s) with the
+    preset and for three or more with a 0.15 s hold pressing 10 mm, and both place every box in its bin."""
+    held_on_belt = {}
+    for hold, press in ((TRACKING_EXPERT.track_hold_time, TRACKING_EXPERT.press), (0.15, 0.01)):
+        env = tracking_env(make_env, ignore_done=True)
+        obs = env.reset(seed=1)
+        expert = make_expert(env, changed(TRACKING_EXPERT, (("press", press), ("track_hold_time", hold))))
+        expert.reset(obs)
+        seal, data, layout = env.plant.seal, env.plant.data, env.layout
+        steps = 0
+        while len(env.events) < 2 and env.cur_time < 20.0:
+            obs, _, _, _ = env.step(expert.act(obs))
+            resting = layout.belt_top_z + layout.box_size / 2 + 0.002  # [m] a box's centre on the belt
+            steps += seal.held is not None and data.xpos[seal.box_bodies[seal.held]][2] < resting
+        assert [e.outcome for e in env.events[:2]] == ["placed"] * 2, env.events
+        held_on_belt[hold] = steps / 2
+    assert held_on_belt[TRACKING_EXPERT.track_hold_time] <= 1 and held_on_belt[0.15] >= 3
 
 
 def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped(make_env):

@@ -37,6 +37,7 @@ from colorsort.data.config import FPS_CHOICES, VCODECS, CollectConfig
 from colorsort.data.perturbations import PERTURBATIONS, parse
 from colorsort.errors import FAILED, INTERRUPTED
 from colorsort.executors.base import EXECUTORS
+from colorsort.expert.config import parse_changes
 from colorsort.logs import quiet_robosuite_info
 from colorsort.robots import ROBOTS
 from colorsort.variants import VARIANTS, get_variant
@@ -77,6 +78,9 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
                             help=f"{kind.help} (colorsort.data.perturbations.{kind.__module__.rsplit('.', 1)[-1]})")
     parser.add_argument("--no-turn", action="store_true",
                         help="the expert keeps the cup at its home yaw over a turned box instead of turning to it")
+    parser.add_argument("--expert", default=None, metavar="NAME:VALUE,...",
+                        help="the expert's settings changed from its belt's preset (colorsort.expert.config), e.g. "
+                             "press:0.01,track_hold_time:0.15")
     parser.add_argument("--resume", action="store_true", help="add the missing episodes to an existing dataset")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset")
     args = parser.parse_args(argv)
@@ -93,7 +97,8 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
         cameras=parse_cameras(args.cameras),
         image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
         executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
-        turn_to_box=not args.no_turn, resume=args.resume, overwrite=args.overwrite,
+        turn_to_box=not args.no_turn, expert=parse_changes(args.expert) if args.expert else (),
+        resume=args.resume, overwrite=args.overwrite,
         perturbations=tuple(parse(name, getattr(args, name)) for name in PERTURBATIONS
                             if getattr(args, name) is not None))
 

@@ -24,6 +24,7 @@ import argparse
 from colorsort.cli.run import guarded
 from colorsort.data.config import VCODECS
 from colorsort.errors import FAILED, ConfigError
+from colorsort.expert.config import parse_changes
 from colorsort.logs import quiet_robosuite_info
 from colorsort.training.takeover import TAKEOVER_SEED, TakeoverConfig, record_takeovers
 
@@ -53,10 +54,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repo-id", default="local/colorsort-takeover", help="the dataset's LeRobot repo id")
     parser.add_argument("--vcodec", default=TakeoverConfig.vcodec,
                         help=f"video codec, one of {VCODECS}: the demos' (colorsort-collect --vcodec)")
+    parser.add_argument("--expert", default=None, metavar="NAME:VALUE,...",
+                        help="the expert's settings changed from its belt's preset, as colorsort-collect's --expert "
+                             "(give the demos' own)")
     args = parser.parse_args(argv)
     config = TakeoverConfig(policy=args.policy, out=args.out, variant=args.variant, episodes=args.episodes,
                             handover=parse_handover(args.handover), seed=args.seed, repo_id=args.repo_id,
-                            vcodec=args.vcodec)
+                            vcodec=args.vcodec, expert=parse_changes(args.expert) if args.expert else ())
     summary = record_takeovers(config)
     print(f"kept {len(summary.kept)} of {config.episodes} episodes, {summary.frames} expert-labelled frames "
           f"-> {summary.root}")

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
 from colorsort.data.perturbations import Perturbation, canonical
 from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
+from colorsort.expert.config import ExpertConfig, changed, expert_preset
 from colorsort.robots import get_robot
 from colorsort.variants import get_variant
 
@@ -46,6 +47,8 @@ class CollectConfig:
     # the demonstrator's perturbations (data.perturbations: late_pass, late_pick, brightness); kept in name order
     perturbations: tuple[Perturbation, ...] = ()
     turn_to_box: bool = True  # the expert turns the cup to a turned box; False: it keeps its home yaw (ExpertConfig)
+    # the expert's settings changed from its belt's preset, (name, value) pairs (expert.config.CHANGEABLE)
+    expert: tuple[tuple[str, float], ...] = ()
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
 
@@ -77,6 +80,7 @@ class CollectConfig:
             raise ConfigError(f"image_size={self.image_size}: height and width must be even, in [16, 1024] px")
         if self.seed < 0:
             raise ConfigError(f"seed={self.seed} must be >= 0")
+        self.expert_config  # noqa: B018 - validates the expert's changes
         if self.resume and self.overwrite:
             raise ConfigError("Pass --resume or --overwrite, not both")
 
@@ -87,12 +91,20 @@ class CollectConfig:
         settings = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items() if k in keys}
         if not self.turn_to_box:  # recorded only when off: datasets from before the option resume as they did
             settings["turn_to_box"] = False
+        if self.expert:  # the same: recorded only when set
+            settings["expert"] = [list(pair) for pair in self.expert]
         settings.update({p.name: p.settings() for p in self.perturbations})
         return settings
 
     @property
     def executor_config(self) -> ExecutorConfig:
         return ExecutorConfig(self.executor, self.workers, self.retries, self.address)
+
+    @property
+    def expert_config(self) -> ExpertConfig:
+        """The expert that records: its belt's preset, ``turn_to_box`` and the ``expert`` changes."""
+        preset = replace(expert_preset(self.task_config.tracking), turn_to_box=self.turn_to_box)
+        return changed(preset, self.expert)
 
     @property
     def task_config(self) -> TaskConfig:

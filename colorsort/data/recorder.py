@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 import traceback
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
@@ -24,7 +24,7 @@ from colorsort.data.perturbations import Step, perturbed
 from colorsort.data.schema import features, frame, task_text
 from colorsort.executors.base import held_interrupts
 from colorsort.expert.base import Expert
-from colorsort.expert.factory import expert_preset, make_expert
+from colorsort.expert.factory import make_expert
 from colorsort.variants import get_variant
 
 STAGES = ("setup", "expert", "physics and control", "rendering", "frames to lerobot", "episode saving")
@@ -96,7 +96,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     sec = out.seconds
     t0 = time.perf_counter()
     env = make_recording_env(config)
-    expert = make_expert(env, replace(expert_preset(env.config.tracking), turn_to_box=config.turn_to_box))
+    expert = make_expert(env, config.expert_config)
     lighting = None
     if config.variant:
         variant = get_variant(config.variant)

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
 
 from colorsort.config import check_range
+from colorsort.errors import ConfigError
 from colorsort.expert.perception import PerceptionConfig
 from colorsort.expert.planning import MotionConfig
 
@@ -103,3 +105,54 @@ STOPPING_EXPERT = ExpertConfig()
 TRACKING_EXPERT = ExpertConfig(motion=MotionConfig(acceleration=None, jerk=1500.0), release_time=0.0,
                                track_descend_time=0.10, track_lift_time=0.08, track_carry_at=0.5,
                                feed_forward_acceleration=True, wait_over_bin=True, drop_slots=2)
+
+
+def expert_preset(tracking: bool) -> ExpertConfig:
+    """The expert's settings for a belt: ``TRACKING_EXPERT`` on a tracking one, ``STOPPING_EXPERT`` otherwise."""
+    return TRACKING_EXPERT if tracking else STOPPING_EXPERT
+
+
+# the settings a demo recipe may change by name: the numeric ones (the nested limits and thresholds, and the
+# switches, keep their presets; ``turn_to_box`` has its own flag)
+CHANGEABLE = tuple(f.name for f in fields(ExpertConfig) if f.type in ("float", "int"))
+
+
+def changed(config: ExpertConfig, changes: tuple[tuple[str, float], ...]) -> ExpertConfig:
+    """``config`` with the (name, value) ``changes`` made, each checked as the dataclass checks it.
+
+    Raises:
+        ConfigError: a name not in ``CHANGEABLE`` (the message lists them), a name given twice, or a value out of
+            its range.
+    """
+    names = [name for name, _ in changes]
+    unknown = sorted(set(names) - set(CHANGEABLE))
+    if unknown:
+        raise ConfigError(f"expert settings {unknown} cannot be changed; valid names: {list(CHANGEABLE)}")
+    if len(set(names)) != len(names):
+        raise ConfigError(f"expert settings {names}: give each name once")
+    kinds = {f.name: f.type for f in fields(ExpertConfig)}
+    fractional = [name for name, value in changes if kinds[name] == "int" and value != int(value)]
+    if fractional:
+        raise ConfigError(f"expert settings {fractional} are whole numbers")
+    values: dict[str, Any] = {name: int(value) if kinds[name] == "int" else float(value) for name, value in changes}
+    return replace(config, **values)
+
+
+def parse_changes(text: str) -> tuple[tuple[str, float], ...]:
+    """``"press:0.01,track_hold_time:0.15"`` as ((name, value), ...); names are checked by ``changed``."""
+    pairs = []
+    for part in text.split(","):
+        name, sep, value = part.partition(":")
+        try:
+            pairs.append((name.strip(), float(value)))
+        except ValueError:
+            sep = ""
+        if not sep:
+            raise ConfigError(f"expert changes {text!r}: give NAME:VALUE pairs, comma-separated, e.g. "
+                              f"press:0.01,track_hold_time:0.15 (names: {list(CHANGEABLE)})")
+    return tuple(pairs)
+
+
+def changes_text(changes: tuple[tuple[str, float], ...]) -> str:
+    """The command-line value ``parse_changes`` turns back into ``changes``: ``"press:0.01,track_hold_time:0.15"``."""
+    return ",".join(f"{name}:{value:g}" for name, value in changes)

@@ -7,17 +7,14 @@ from typing import TYPE_CHECKING
 from colorsort.errors import ConfigError
 from colorsort.expert.base import Expert
 from colorsort.expert.calibration import Calibration, sensor_source
-from colorsort.expert.config import STOPPING_EXPERT, TRACKING_EXPERT, ExpertConfig
+from colorsort.expert.config import ExpertConfig, expert_preset
 from colorsort.expert.sorter import SortingExpert
 from colorsort.expert.tracking import TrackingExpert
 
+__all__ = ["expert_preset", "make_expert"]
+
 if TYPE_CHECKING:
     from colorsort.cell.env import ColorSort
-
-
-def expert_preset(tracking: bool) -> ExpertConfig:
-    """The expert's settings for a belt: ``TRACKING_EXPERT`` on a tracking one, ``STOPPING_EXPERT`` otherwise."""
-    return TRACKING_EXPERT if tracking else STOPPING_EXPERT
 
 
 def make_expert(env: ColorSort, config: ExpertConfig | None = None) -> Expert:

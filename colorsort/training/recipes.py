@@ -37,6 +37,7 @@ from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
+from colorsort.expert.config import changed, expert_preset
 from colorsort.training.dagger_settings import DaggerSettings
 from colorsort.training.methods import method_name
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SNAPSHOT_DIFFUSION, TRACKING_ACT, PolicySettings
@@ -72,6 +73,9 @@ class DemoSettings:
         perturbations: the demonstrator's perturbations (``colorsort.data.perturbations``), each given to the
             training variants it applies to.
         turn_to_box: the expert turns the cup to a turned box; False: it keeps its home yaw.
+        expert: the expert's settings changed from its belt's preset, (name, value) pairs of ``ExpertConfig``
+            fields (``colorsort.expert.config.CHANGEABLE``), for the demos and DAgger's labels alike, e.g.
+            press:0.01,track_hold_time:0.15.
     """
 
     train_mix: tuple[tuple[str, float], ...] = (("default", 1.0), ("jitter", 1.0), ("fast", 1.0),
@@ -83,6 +87,7 @@ class DemoSettings:
     image_size: int = 64
     perturbations: tuple[Perturbation, ...] = ()
     turn_to_box: bool = True
+    expert: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         for variant in self.train_variants:
@@ -99,6 +104,8 @@ class DemoSettings:
                 raise ConfigError(f"boxes_by_variant has ({variant!r}, {boxes}): give at least 1 box")
         _at_least_one(self, "boxes_per_episode", "image_size")
         check_cameras(self.cameras)
+        for tracking in {get_variant(v).task_config.tracking for v in self.train_variants}:
+            changed(expert_preset(tracking), self.expert)  # ConfigError naming the valid settings
         object.__setattr__(self, "perturbations", canonical(self.perturbations))
         for p in self.perturbations:
             if not self.applying(p):

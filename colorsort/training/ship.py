@@ -58,7 +58,9 @@ def demo_line(recipe: Recipe) -> str:
                                             if p not in everywhere)
                     for v, c in demos.split(demos.counts[-1]).items())
     boxes = f"{demos.boxes_per_episode} boxes each" + "".join(f", {v}'s {n}" for v, n in demos.boxes_by_variant)
-    return "; ".join([mix, boxes, *(p.describe() for p in everywhere)])
+    expert = ([f"the expert's {', '.join(f'{n} {v:g}' for n, v in demos.expert)} (`ExpertConfig`, changed from its "
+               "preset)"] if demos.expert else [])
+    return "; ".join([mix, boxes, *(p.describe() for p in everywhere), *expert])
 
 
 def dagger_line(recipe: Recipe, frames: int) -> str:

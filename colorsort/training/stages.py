@@ -35,6 +35,7 @@ from pathlib import Path
 
 from colorsort.data.config import CollectConfig
 from colorsort.errors import DataConflictError, StageError
+from colorsort.expert.config import changes_text
 from colorsort.training import cache
 from colorsort.training.partial_runs import first_updates, longer_run, resume_marker
 from colorsort.training.recipes import Recipe
@@ -101,7 +102,8 @@ def collect_command(recipe: Recipe, variant: str, k: int, count: int, workers: i
              "--cameras", ",".join(demos.cameras) or "none", "--image-size", str(demos.image_size),
              "--workers", str(workers), "--repo-id", REPO_ID]
             + [f"--{p.name.replace('_', '-')}={p.text}" for p in demos.perturbations_on(variant)]
-            + ([] if demos.turn_to_box else ["--no-turn"]))
+            + ([] if demos.turn_to_box else ["--no-turn"])
+            + ([f"--expert={changes_text(demos.expert)}"] if demos.expert else []))
 
 
 def part_settings(command: list[str]) -> dict:
@@ -145,6 +147,8 @@ def label(recipe: Recipe, model: Path, variant: str, k: int, round_: int, out: P
     seed = TAKEOVER_SEED + k * SEED_STRIDE + (round_ - 1) * dagger.episodes
     args = ["--variant", variant, "--episodes", str(dagger.episodes), "--handover", "{},{}".format(*dagger.handover),
             "--seed", str(seed), "--repo-id", REPO_ID, "--vcodec", CollectConfig.vcodec]  # the demos' codec
+    if recipe.demos.expert:  # the expert that made the demos labels (the key of earlier labels stays as it was)
+        args.append(f"--expert={changes_text(recipe.demos.expert)}")
     settings = {"colorsort-takeover": ["--policy", checkpoint_name(model), *args]}
     root = out / "data" / cache.name(f"labels-{variant}-r{round_}", settings)
     if (root / cache.SETTINGS_FILE).is_file():

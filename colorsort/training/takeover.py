@@ -25,6 +25,7 @@ from colorsort.cell.privileged import take_over_view
 from colorsort.data.config import CollectConfig, check_vcodec
 from colorsort.data.schema import features, frame
 from colorsort.errors import ConfigError
+from colorsort.expert.config import ExpertConfig, changed, expert_preset
 from colorsort.expert.factory import make_expert
 from colorsort.variants import get_variant
 
@@ -48,6 +49,8 @@ class TakeoverConfig:
         repo_id: the dataset's LeRobot repo id.
         vcodec: the camera streams' video codec (``colorsort-collect``'s ``--vcodec``): LeRobot merges the labels
             with demos only when their features, codec included, are the same.
+        expert: the expert's settings changed from its belt's preset, (name, value) pairs
+            (``colorsort-collect``'s ``--expert``): the labels come from the expert that made the demos.
     """
 
     policy: str
@@ -58,9 +61,11 @@ class TakeoverConfig:
     seed: int = TAKEOVER_SEED
     repo_id: str = "local/colorsort-takeover"
     vcodec: str = CollectConfig.vcodec
+    expert: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         get_variant(self.variant)  # ConfigError naming the valid variants
+        self.expert_config  # noqa: B018 - validates the expert's changes
         check_vcodec(self.vcodec)
         if self.episodes < 1:
             raise ConfigError(f"episodes={self.episodes}: give at least 1")
@@ -69,6 +74,11 @@ class TakeoverConfig:
             raise ConfigError(f"handover={self.handover}: give (first, last) steps with 0 <= first <= last")
         if self.seed < 0:
             raise ConfigError(f"seed={self.seed}: give 0 or more")
+
+    @property
+    def expert_config(self) -> ExpertConfig:
+        """The expert that takes over: its belt's preset with the ``expert`` changes."""
+        return changed(expert_preset(get_variant(self.variant).task_config.tracking), self.expert)
 
 
 @dataclass
@@ -106,7 +116,7 @@ def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
     dataset = LeRobotDataset.create(config.repo_id, gym.fps, features(gym.env, cameras, image_size), root=root,
                                     robot_type=gym.variant.robot, use_videos=True, video_backend="pyav",
                                     rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec))
-    expert = make_expert(gym.env)
+    expert = make_expert(gym.env, config.expert_config)
     try:
         for seed in seeds:
             obs, _ = gym.reset(seed=seed)
