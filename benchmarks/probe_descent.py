@@ -1,0 +1,133 @@
+"""How low does the cup come over each box? A policy's descents, box by box, beside whether the vacuum sealed.
+
+    python benchmarks/probe_descent.py --policy expert --variant tracking-jitter --episodes 10
+    python benchmarks/probe_descent.py --policy baselines/act-camera-tracking-dagger --variant tracking-jitter \\
+        --episodes 50
+
+For every box that rode the belt: the cup body's lowest height [mm] over the box's top face, in any control step
+while the cup's axis passed within 20 mm of the box's centre (on the belt, not yet lifted), and whether the cup
+sealed it. Printed per band of the box's offset from the belt's centre line (+ toward the bins; the bands of
+``colorsort-analyze by-pose``): how many boxes, how many were never sealed, and the lowest heights (median, and
+the range) of the sealed and the never-sealed ones. The pad touches a box's top with the cup about 25 mm over
+it, so a box never sealed with the cup lower than that was touched off the pad's face, one never sealed above
+it was not reached. Episode k runs with the variant's k-th evaluation seed (or ``--seed`` + k), as colorsort-eval's.
+``--trace SEED,BOX`` prints instead, for box number BOX (0 the first to appear) of the episode of env seed SEED,
+every control step with the cup's axis within 30 mm of it: the cup's height over its top, suction, the seal.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ.setdefault("HF_HUB_OFFLINE", "1")
+
+import numpy as np  # noqa: E402
+
+from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, episode_seeds, observation_settings  # noqa: E402
+from colorsort.benchmark.outcomes import OFFSET_BANDS  # noqa: E402
+from colorsort.results import recorded  # noqa: E402
+from colorsort.variants import get_variant  # noqa: E402
+
+NEAR = 0.02  # [m] the cup's axis this near a box's centre counts as over it
+
+
+def descents(runner: EpisodeRunner, seed: int) -> list[tuple[float, bool, float | None]]:
+    """One episode: (offset [m], sealed, lowest cup height over the top face [m] or None) per box that left the
+    belt."""
+    env = runner.env
+    obs, _ = env.reset(seed=seed)
+    runner.policy.reset(env, seed)
+    cell = env.env
+    seal, data, layout = cell.plant.seal, cell.plant.data, cell.layout
+    resting = layout.belt_top_z + layout.box_size / 2 + 0.005  # [m] a box centre this low is on the belt
+    lowest: dict[int, float] = {}
+    offset: dict[int, float] = {}
+    sealed: set[int] = set()
+    done = False
+    while not done:
+        obs, _, terminated, truncated, _ = env.step(runner.policy.act(obs))
+        done = terminated or truncated
+        cup = data.xpos[seal.cup]
+        for box in cell.boxes_in_play():
+            pos = cell.box_pos(box)
+            if box.serial < 0 or pos[2] > resting:
+                continue
+            offset.setdefault(box.serial, float(pos[1] - layout.belt_y))
+            if np.hypot(cup[0] - pos[0], cup[1] - pos[1]) < NEAR:
+                height = float(cup[2] - pos[2] - layout.box_size / 2)
+                lowest[box.serial] = min(lowest.get(box.serial, np.inf), height)
+        if seal.held is not None:  # the pool's boxes and the seal's are in one order
+            sealed.add(cell.boxes[seal.held].serial)
+    return [(offset.get(e.serial, float("nan")), e.serial in sealed, lowest.get(e.serial))
+            for e in cell.events[: env.variant.boxes]]
+
+
+def trace(runner: EpisodeRunner, seed: int, serial: int) -> None:
+    """Print the steps of episode ``seed`` in which the cup passes over box ``serial``, until the episode ends."""
+    env = runner.env
+    obs, _ = env.reset(seed=seed)
+    runner.policy.reset(env, seed)
+    cell = env.env
+    seal, data, layout = cell.plant.seal, cell.plant.data, cell.layout
+    print(f"{runner.policy.name}, seed {seed}, box {serial}")
+    print("| step | cup over the top [mm] | axis from the centre [mm] | suction | sealed |")
+    print("| --- | --- | --- | --- | --- |")
+    done, step = False, 0
+    while not done:
+        obs, _, terminated, truncated, _ = env.step(runner.policy.act(obs))
+        done, step = terminated or truncated, step + 1
+        cup = data.xpos[seal.cup]
+        for box in cell.boxes_in_play():
+            pos = cell.box_pos(box)
+            near = np.hypot(cup[0] - pos[0], cup[1] - pos[1])
+            if box.serial == serial and near < 0.03:
+                held = seal.held is not None and cell.boxes[seal.held].serial == serial
+                print(f"| {step} | {1000 * (cup[2] - pos[2] - layout.box_size / 2):.1f} | {1000 * near:.0f} "
+                      f"| {'on' if seal.commanded else 'off'} | {'yes' if held else 'no'} |")
+
+
+def summary(heights: list[float | None]) -> str:
+    """'median (min-max) mm' of the heights, 'not over it' for boxes the cup never passed over."""
+    found = [1000 * h for h in heights if h is not None]
+    missed = len(heights) - len(found)
+    text = f"{np.median(found):.1f} ({min(found):.1f}-{max(found):.1f})" if found else "-"
+    return text + (f", {missed} never under the cup" if missed else "")
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--policy", default="expert", help="expert, or a LeRobot checkpoint folder")
+    p.add_argument("--variant", default="tracking-jitter")
+    p.add_argument("--episodes", type=int, default=10)
+    p.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's evaluation seeds)")
+    p.add_argument("--trace", default=None, metavar="SEED,BOX", help="step by step over one box of one episode")
+    args = p.parse_args()
+    variant = get_variant(args.variant)
+    cameras, size = observation_settings(args.policy, None, None)
+    runner = EpisodeRunner(EvalSettings(args.policy, variant.name, size, cameras))
+    boxes = []
+    try:
+        if args.trace:
+            seed, serial = (int(t) for t in args.trace.split(","))
+            trace(runner, seed, serial)
+            return
+        for seed in episode_seeds(variant, args.episodes, args.seed):
+            boxes += descents(runner, seed)
+    finally:
+        runner.close()
+    print(f"{args.policy} on {variant.name}, {args.episodes} episodes, {len(boxes)} boxes")
+    print("| offset [cm] | boxes | never sealed | lowest [mm], sealed: median (range) | lowest [mm], never sealed |")
+    print("| --- | --- | --- | --- | --- |")
+    for lo, hi in OFFSET_BANDS:
+        inside = [b for b in boxes if lo <= b[0] < hi or (hi == OFFSET_BANDS[-1][1] and b[0] == hi)]
+        won = [h for _, s, h in inside if s]
+        lost = [h for _, s, h in inside if not s]
+        print(f"| {100 * lo:g} to {100 * hi:g} | {len(inside)} | {len(lost)} | {summary(won)} | "
+              f"{summary(lost) if lost else ''} |")
+
+
+if __name__ == "__main__":
+    with recorded(__file__):
+        main()
