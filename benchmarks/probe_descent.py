@@ -11,6 +11,7 @@ sealed it. Printed per band of the box's offset from the belt's centre line (+ t
 the range) of the sealed and the never-sealed ones. The pad touches a box's top with the cup about 25 mm over
 it, so a box never sealed with the cup lower than that was touched off the pad's face, one never sealed above
 it was not reached. Episode k runs with the variant's k-th evaluation seed (or ``--seed`` + k), as colorsort-eval's.
+``--expert NAME:VALUE,...`` changes the expert's settings from its belt's preset, as colorsort-collect's does.
 ``--trace SEED,BOX`` prints instead, for box number BOX (0 the first to appear) of the episode of env seed SEED,
 every control step with the cup's axis within 30 mm of it: the cup's height over its top, suction, the seal.
 """
@@ -27,6 +28,8 @@ import numpy as np  # noqa: E402
 
 from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, episode_seeds, observation_settings  # noqa: E402
 from colorsort.benchmark.outcomes import OFFSET_BANDS  # noqa: E402
+from colorsort.benchmark.policies import ExpertPolicy  # noqa: E402
+from colorsort.expert.config import changed, expert_preset, parse_changes  # noqa: E402
 from colorsort.results import recorded  # noqa: E402
 from colorsort.variants import get_variant  # noqa: E402
 
@@ -103,10 +106,16 @@ def main() -> None:
     p.add_argument("--episodes", type=int, default=10)
     p.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's evaluation seeds)")
     p.add_argument("--trace", default=None, metavar="SEED,BOX", help="step by step over one box of one episode")
+    p.add_argument("--expert", default=None, metavar="NAME:VALUE,...",
+                   help="with --policy expert: its settings changed from its preset")
     args = p.parse_args()
+    if args.expert and args.policy != "expert":
+        p.error("--expert changes the scripted expert's settings: give it with --policy expert")
     variant = get_variant(args.variant)
     cameras, size = observation_settings(args.policy, None, None)
     runner = EpisodeRunner(EvalSettings(args.policy, variant.name, size, cameras))
+    if args.expert:
+        runner.policy = ExpertPolicy(changed(expert_preset(variant.task_config.tracking), parse_changes(args.expert)))
     boxes = []
     try:
         if args.trace:
@@ -117,7 +126,8 @@ def main() -> None:
             boxes += descents(runner, seed)
     finally:
         runner.close()
-    print(f"{args.policy} on {variant.name}, {args.episodes} episodes, {len(boxes)} boxes")
+    who = f"expert ({args.expert})" if args.expert else args.policy
+    print(f"{who} on {variant.name}, {args.episodes} episodes, {len(boxes)} boxes")
     print("| offset [cm] | boxes | never sealed | lowest [mm], sealed: median (range) | lowest [mm], never sealed |")
     print("| --- | --- | --- | --- | --- |")
     for lo, hi in OFFSET_BANDS:

@@ -276,3 +276,18 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
     assert "2 dropped: 1 never picked, 1 lost after the cup picked them" in out.stdout.splitlines()
 
 
+
+
+def test_the_expert_policy_plays_with_the_settings_it_is_given(closing):
+    """``ExpertPolicy(config)`` (``benchmarks/probe_descent.py --expert``) builds its expert from ``config``, not from
+    the belt's preset; without one it takes the preset."""
+    from colorsort.benchmark.policies import ExpertPolicy
+    from colorsort.expert.config import TRACKING_EXPERT, changed
+
+    env = closing(ColorSortGymEnv("tracking-jitter", cameras=(), render_mode="rgb_array"))
+    env.reset(seed=0)
+    deeper = changed(TRACKING_EXPERT, (("press", 0.01), ("track_hold_time", 0.15)))
+    given, preset = ExpertPolicy(deeper), ExpertPolicy()
+    given.reset(env, 0)
+    preset.reset(env, 0)
+    assert given.expert.config == deeper and preset.expert.config == TRACKING_EXPERT

@@ -17,6 +17,7 @@ import numpy as np
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.data.schema import state_size
 from colorsort.errors import ConfigError
+from colorsort.expert.config import ExpertConfig
 from colorsort.robots import get_robot
 from colorsort.variants import Variant
 
@@ -30,16 +31,20 @@ class Policy(Protocol):
 
 
 class ExpertPolicy:
-    """The scripted expert (``expert.factory.make_expert``): it reads the robosuite observation behind ``obs``."""
+    """The scripted expert (``expert.factory.make_expert``): it reads the robosuite observation behind ``obs``.
+    ``config`` replaces its belt's preset settings (``ExpertConfig``)."""
 
     name = "expert"
+
+    def __init__(self, config: ExpertConfig | None = None):
+        self.config = config
 
     def reset(self, env: ColorSortGymEnv, seed: int) -> None:
         from colorsort.expert.factory import make_expert
 
         self.env = env
         if getattr(self, "_for", None) is not env.env:  # the expert's IK and drop points: once per env
-            self.expert, self._for = make_expert(env.env), env.env
+            self.expert, self._for = make_expert(env.env, self.config), env.env
         self.expert.reset(env.raw_obs)
 
     def act(self, obs: dict[str, Any]) -> np.ndarray:
