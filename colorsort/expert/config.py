@@ -144,12 +144,12 @@ def parse_changes(text: str) -> tuple[tuple[str, float], ...]:
     for part in text.split(","):
         name, sep, value = part.partition(":")
         try:
+            if not sep:
+                raise ValueError(part)
             pairs.append((name.strip(), float(value)))
         except ValueError:
-            sep = ""
-        if not sep:
             raise ConfigError(f"expert changes {text!r}: give NAME:VALUE pairs, comma-separated, e.g. "
-                              f"press:0.01,track_hold_time:0.15 (names: {list(CHANGEABLE)})")
+                              f"press:0.01,track_hold_time:0.15 (names: {list(CHANGEABLE)})") from None
     return tuple(pairs)
 
 
