@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from collections.abc import Iterator
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
@@ -36,23 +37,29 @@ from colorsort.variants import get_variant  # noqa: E402
 NEAR = 0.02  # [m] the cup's axis this near a box's centre counts as over it
 
 
-def descents(runner: EpisodeRunner, seed: int) -> list[tuple[float, bool, float | None]]:
-    """One episode: (offset [m], sealed, lowest cup height over the top face [m] or None) per box that left the
-    belt."""
+def played(runner: EpisodeRunner, seed: int) -> Iterator[int]:
+    """Play the episode of env seed ``seed`` with the runner's policy, yielding the step count after each step."""
     env = runner.env
     obs, _ = env.reset(seed=seed)
     runner.policy.reset(env, seed)
-    cell = env.env
-    seal, data, layout = cell.plant.seal, cell.plant.data, cell.layout
-    resting = layout.belt_top_z + layout.box_size / 2 + 0.005  # [m] a box centre this low is on the belt
+    done, step = False, 0
+    while not done:
+        obs, _, terminated, truncated, _ = env.step(runner.policy.act(obs))
+        done, step = terminated or truncated, step + 1
+        yield step
+
+
+def descents(runner: EpisodeRunner, seed: int) -> list[tuple[float, bool, float | None]]:
+    """One episode: (offset [m], sealed, lowest cup height over the top face [m] or None) per box that left the
+    belt."""
+    cell = runner.env.env
     lowest: dict[int, float] = {}
     offset: dict[int, float] = {}
     sealed: set[int] = set()
-    done = False
-    while not done:
-        obs, _, terminated, truncated, _ = env.step(runner.policy.act(obs))
-        done = terminated or truncated
-        cup = data.xpos[seal.cup]
+    for _ in played(runner, seed):
+        seal, layout = cell.plant.seal, cell.layout
+        resting = layout.belt_top_z + layout.box_size / 2 + 0.005  # [m] a box centre this low is on the belt
+        cup = cell.plant.data.xpos[seal.cup]
         for box in cell.boxes_in_play():
             pos = cell.box_pos(box)
             if box.serial < 0 or pos[2] > resting:
@@ -64,24 +71,18 @@ def descents(runner: EpisodeRunner, seed: int) -> list[tuple[float, bool, float 
         if seal.held is not None:  # the pool's boxes and the seal's are in one order
             sealed.add(cell.boxes[seal.held].serial)
     return [(offset.get(e.serial, float("nan")), e.serial in sealed, lowest.get(e.serial))
-            for e in cell.events[: env.variant.boxes]]
+            for e in cell.events[: runner.env.variant.boxes]]
 
 
 def trace(runner: EpisodeRunner, seed: int, serial: int) -> None:
-    """Print the steps of episode ``seed`` in which the cup passes over box ``serial``, until the episode ends."""
-    env = runner.env
-    obs, _ = env.reset(seed=seed)
-    runner.policy.reset(env, seed)
-    cell = env.env
-    seal, data, layout = cell.plant.seal, cell.plant.data, cell.layout
+    """Print the steps of episode ``seed`` in which the cup passes within 30 mm of box ``serial``'s centre."""
+    cell = runner.env.env
     print(f"{runner.policy.name}, seed {seed}, box {serial}")
     print("| step | cup over the top [mm] | axis from the centre [mm] | suction | sealed |")
     print("| --- | --- | --- | --- | --- |")
-    done, step = False, 0
-    while not done:
-        obs, _, terminated, truncated, _ = env.step(runner.policy.act(obs))
-        done, step = terminated or truncated, step + 1
-        cup = data.xpos[seal.cup]
+    for step in played(runner, seed):
+        seal, layout = cell.plant.seal, cell.layout
+        cup = cell.plant.data.xpos[seal.cup]
         for box in cell.boxes_in_play():
             pos = cell.box_pos(box)
             near = np.hypot(cup[0] - pos[0], cup[1] - pos[1])
@@ -92,7 +93,7 @@ def trace(runner: EpisodeRunner, seed: int, serial: int) -> None:
 
 
 def summary(heights: list[float | None]) -> str:
-    """'median (min-max) mm' of the heights, 'not over it' for boxes the cup never passed over."""
+    """'median (min-max)' of the heights [mm], and how many boxes the cup never passed over (None)."""
     found = [1000 * h for h in heights if h is not None]
     missed = len(heights) - len(found)
     text = f"{np.median(found):.1f} ({min(found):.1f}-{max(found):.1f})" if found else "-"
