@@ -7,13 +7,15 @@
 For every box that rode the belt: the cup body's lowest height [mm] over the box's top face, in any control step
 while the cup's axis passed within 20 mm of the box's centre (on the belt, not yet lifted), and whether the cup
 sealed it. Printed per band of the box's offset from the belt's centre line (+ toward the bins; the bands of
-``colorsort-analyze by-pose``): how many boxes, how many were never sealed, and the lowest heights (median, and
-the range) of the sealed and the never-sealed ones. The pad touches a box's top with the cup about 25 mm over
-it, so a box never sealed with the cup lower than that was touched off the pad's face, one never sealed above
-it was not reached. Episode k runs with the variant's k-th evaluation seed (or ``--seed`` + k), as colorsort-eval's.
+``colorsort-analyze by-pose``): how many boxes, how many were never sealed, the lowest heights (median, and the
+range) of the sealed and the never-sealed ones, and where the cup's axis was from the sealed boxes' centres when
+the seal closed (median, mm downstream along the belt and toward the bins). The pad touches a box's top with the
+cup about 25 mm over it, so a box never sealed with the cup lower than that was touched off the pad's face, one
+never sealed above it was not reached. Episode k runs with the variant's k-th evaluation seed (or ``--seed`` + k),
+as colorsort-eval's.
 ``--expert NAME:VALUE,...`` changes the expert's settings from its belt's preset, as colorsort-collect's does.
 ``--trace SEED,BOX`` prints instead, for box number BOX (0 the first to appear) of the episode of env seed SEED,
-every control step with the cup's axis within 30 mm of it: the cup's height over its top, suction, the seal.
+every control step with the cup's axis within 50 mm of it: the cup's height over its top, suction, the seal.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from __future__ import annotations
 import argparse
 import os
 from collections.abc import Iterator
+from typing import NamedTuple
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
@@ -49,13 +52,21 @@ def played(runner: EpisodeRunner, seed: int) -> Iterator[int]:
         yield step
 
 
-def descents(runner: EpisodeRunner, seed: int) -> list[tuple[float, bool, float | None]]:
-    """One episode: (offset [m], sealed, lowest cup height over the top face [m] or None) per box that left the
-    belt."""
+class Descent(NamedTuple):
+    """One box's pass under the cup [m]."""
+
+    offset: float  # the box's centre from the belt's centre line, + toward the bins
+    lowest: float | None  # the cup's lowest height over the box's top face while over it; None: never over it
+    seal: tuple[float, float] | None  # the cup's axis from the box's centre when it sealed (downstream, toward the
+    # bins); None: never sealed
+
+
+def descents(runner: EpisodeRunner, seed: int) -> list[Descent]:
+    """One episode: a ``Descent`` per box that left the belt."""
     cell = runner.env.env
     lowest: dict[int, float] = {}
     offset: dict[int, float] = {}
-    sealed: set[int] = set()
+    sealed: dict[int, tuple[float, float]] = {}
     for _ in played(runner, seed):
         seal, layout = cell.plant.seal, cell.layout
         resting = layout.belt_top_z + layout.box_size / 2 + 0.005  # [m] a box centre this low is on the belt
@@ -69,13 +80,16 @@ def descents(runner: EpisodeRunner, seed: int) -> list[tuple[float, bool, float 
                 height = float(cup[2] - pos[2] - layout.box_size / 2)
                 lowest[box.serial] = min(lowest.get(box.serial, np.inf), height)
         if seal.held is not None:  # the pool's boxes and the seal's are in one order
-            sealed.add(cell.boxes[seal.held].serial)
-    return [(offset.get(e.serial, float("nan")), e.serial in sealed, lowest.get(e.serial))
+            box = cell.boxes[seal.held]
+            if box.serial not in sealed:
+                pos = cell.box_pos(box)  # the belt runs toward -x
+                sealed[box.serial] = (float(pos[0] - cup[0]), float(cup[1] - pos[1]))
+    return [Descent(offset.get(e.serial, float("nan")), lowest.get(e.serial), sealed.get(e.serial))
             for e in cell.events[: runner.env.variant.boxes]]
 
 
 def trace(runner: EpisodeRunner, seed: int, serial: int) -> None:
-    """Print the steps of episode ``seed`` in which the cup passes within 30 mm of box ``serial``'s centre."""
+    """Print the steps of episode ``seed`` in which the cup passes within 50 mm of box ``serial``'s centre."""
     cell = runner.env.env
     print(f"{runner.policy.name}, seed {seed}, box {serial}")
     print("| step | cup over the top [mm] | axis from the centre [mm] | suction | sealed |")
@@ -86,8 +100,8 @@ def trace(runner: EpisodeRunner, seed: int, serial: int) -> None:
         for box in cell.boxes_in_play():
             pos = cell.box_pos(box)
             near = np.hypot(cup[0] - pos[0], cup[1] - pos[1])
-            if box.serial == serial and near < 0.03:
-                held = seal.held is not None and cell.boxes[seal.held].serial == serial
+            held = seal.held is not None and cell.boxes[seal.held].serial == serial
+            if box.serial == serial and near < 0.05:
                 print(f"| {step} | {1000 * (cup[2] - pos[2] - layout.box_size / 2):.1f} | {1000 * near:.0f} "
                       f"| {'on' if seal.commanded else 'off'} | {'yes' if held else 'no'} |")
 
@@ -117,7 +131,7 @@ def main() -> None:
     runner = EpisodeRunner(EvalSettings(args.policy, variant.name, size, cameras))
     if args.expert:
         runner.policy = ExpertPolicy(changed(expert_preset(variant.task_config.tracking), parse_changes(args.expert)))
-    boxes = []
+    boxes: list[Descent] = []
     try:
         if args.trace:
             seed, serial = (int(t) for t in args.trace.split(","))
@@ -129,14 +143,16 @@ def main() -> None:
         runner.close()
     who = f"expert ({args.expert})" if args.expert else args.policy
     print(f"{who} on {variant.name}, {args.episodes} episodes, {len(boxes)} boxes")
-    print("| offset [cm] | boxes | never sealed | lowest [mm], sealed: median (range) | lowest [mm], never sealed |")
-    print("| --- | --- | --- | --- | --- |")
+    print("| offset [cm] | boxes | never sealed | lowest [mm], sealed: median (range) | lowest [mm], never sealed "
+          "| the seal's axis from the centre [mm]: downstream, toward the bins |")
+    print("| --- | --- | --- | --- | --- | --- |")
     for lo, hi in OFFSET_BANDS:
-        inside = [b for b in boxes if lo <= b[0] < hi or (hi == OFFSET_BANDS[-1][1] and b[0] == hi)]
-        won = [h for _, s, h in inside if s]
-        lost = [h for _, s, h in inside if not s]
-        print(f"| {100 * lo:g} to {100 * hi:g} | {len(inside)} | {len(lost)} | {summary(won)} | "
-              f"{summary(lost) if lost else ''} |")
+        inside = [b for b in boxes if lo <= b.offset < hi or (hi == OFFSET_BANDS[-1][1] and b.offset == hi)]
+        won = [b for b in inside if b.seal is not None]
+        lost = [b.lowest for b in inside if b.seal is None]
+        where = np.median([b.seal for b in won if b.seal is not None], axis=0) * 1000 if won else None
+        print(f"| {100 * lo:g} to {100 * hi:g} | {len(inside)} | {len(lost)} | {summary([b.lowest for b in won])} | "
+              f"{summary(lost) if lost else ''} | {'' if where is None else f'{where[0]:.0f}, {where[1]:.0f}'} |")
 
 
 if __name__ == "__main__":

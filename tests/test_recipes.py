@@ -392,6 +392,22 @@ def test_a_shipped_readme_says_how_the_demos_were_made():
                                       "from its preset)")
 
 
+def test_demos_without_the_wrists_turn_get_daggers_labels_without_it(tmp_path, monkeypatch):
+    """``--demos.turn_to_box=false`` reaches colorsort-collect and colorsort-takeover alike as ``--no-turn``, so the
+    labels come from the expert that made the demos."""
+    from colorsort.training import stages
+    from colorsort.training.stages import collect_command, label
+
+    _, still = colorsort_baseline.parse_args(["--recipe", "camera", "--demos.turn_to_box=false"])
+    turning = get_recipe("camera")
+    assert "--no-turn" in collect_command(still, "jitter", 0, 8, 2)
+    ran: list[list[str]] = []
+    monkeypatch.setattr(stages, "run", lambda command, log: ran.append(command))  # what it would run, not a run
+    model = tmp_path / "train" / "run" / "checkpoints" / "last" / "pretrained_model"
+    assert label(still, model, "jitter", 0, 1, tmp_path) != label(turning, model, "jitter", 0, 1, tmp_path)
+    assert "--no-turn" in ran[0] and "--no-turn" not in ran[1]
+
+
 def test_the_experts_changed_settings_reach_the_demos_and_daggers_labels_and_key_their_caches(tmp_path, monkeypatch):
     """``--demos.expert`` reaches colorsort-collect of every training variant and colorsort-takeover, as their
     ``--expert``, so the demos and the labels come from one expert and no cache of the preset's is reused; an

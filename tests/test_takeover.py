@@ -207,7 +207,8 @@ def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_
 
 def test_the_expert_that_takes_over_is_the_one_that_made_the_demos():
     """``--expert`` (``TakeoverConfig.expert``) changes the taking-over expert's settings from its belt's preset, as
-    colorsort-collect's does the demos'; a name it cannot change is refused naming the valid ones."""
+    colorsort-collect's does the demos', and ``--no-turn`` keeps its home yaw; a name it cannot change is refused
+    naming the valid ones."""
     from colorsort.cli.takeover import main
     from colorsort.expert.config import TRACKING_EXPERT
     from colorsort.training.takeover import TakeoverConfig
@@ -219,3 +220,5 @@ def test_the_expert_that_takes_over_is_the_one_that_made_the_demos():
     with pytest.raises(ValueError, match="valid names: .*'press'"):
         TakeoverConfig(policy="p", out="o", expert=(("hold", 0.15),))
     assert exit_status(main, ["--policy", "p", "--out", "o", "--expert", "press"]) == 2
+    still = TakeoverConfig(policy="p", out="o", variant="jitter", turn_to_box=False)  # --no-turn
+    assert not still.expert_config.turn_to_box and TakeoverConfig(policy="p", out="o").expert_config.turn_to_box

@@ -57,10 +57,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--expert", default=None, metavar="NAME:VALUE,...",
                         help="the expert's settings changed from its belt's preset, as colorsort-collect's --expert "
                              "(give the demos' own)")
+    parser.add_argument("--no-turn", action="store_true",
+                        help="the expert keeps the cup at its home yaw over a turned box, as colorsort-collect's "
+                             "--no-turn (give it where the demos had it)")
     args = parser.parse_args(argv)
     config = TakeoverConfig(policy=args.policy, out=args.out, variant=args.variant, episodes=args.episodes,
                             handover=parse_handover(args.handover), seed=args.seed, repo_id=args.repo_id,
-                            vcodec=args.vcodec, expert=parse_changes(args.expert) if args.expert else ())
+                            vcodec=args.vcodec, expert=parse_changes(args.expert) if args.expert else (),
+                            turn_to_box=not args.no_turn)
     summary = record_takeovers(config)
     print(f"kept {len(summary.kept)} of {config.episodes} episodes, {summary.frames} expert-labelled frames "
           f"-> {summary.root}")

@@ -147,8 +147,11 @@ def label(recipe: Recipe, model: Path, variant: str, k: int, round_: int, out: P
     seed = TAKEOVER_SEED + k * SEED_STRIDE + (round_ - 1) * dagger.episodes
     args = ["--variant", variant, "--episodes", str(dagger.episodes), "--handover", "{},{}".format(*dagger.handover),
             "--seed", str(seed), "--repo-id", REPO_ID, "--vcodec", CollectConfig.vcodec]  # the demos' codec
-    if recipe.demos.expert:  # the expert that made the demos labels (the key of earlier labels stays as it was)
+    # the expert that made the demos labels (the keys of the preset's labels stay as they were)
+    if recipe.demos.expert:
         args.append(f"--expert={changes_text(recipe.demos.expert)}")
+    if not recipe.demos.turn_to_box:
+        args.append("--no-turn")
     settings = {"colorsort-takeover": ["--policy", checkpoint_name(model), *args]}
     root = out / "data" / cache.name(f"labels-{variant}-r{round_}", settings)
     if (root / cache.SETTINGS_FILE).is_file():

@@ -13,7 +13,7 @@ the demos' (``schema.features``), so LeRobot's ``aggregate_datasets`` merges the
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +51,8 @@ class TakeoverConfig:
             with demos only when their features, codec included, are the same.
         expert: the expert's settings changed from its belt's preset, (name, value) pairs
             (``colorsort-collect``'s ``--expert``): the labels come from the expert that made the demos.
+        turn_to_box: the expert turns the cup to a turned box; False keeps its home yaw (``colorsort-collect``'s
+            ``--no-turn``), as the demos' expert did.
     """
 
     policy: str
@@ -62,6 +64,7 @@ class TakeoverConfig:
     repo_id: str = "local/colorsort-takeover"
     vcodec: str = CollectConfig.vcodec
     expert: tuple[tuple[str, float], ...] = ()
+    turn_to_box: bool = True
 
     def __post_init__(self) -> None:
         get_variant(self.variant)  # ConfigError naming the valid variants
@@ -77,8 +80,9 @@ class TakeoverConfig:
 
     @property
     def expert_config(self) -> ExpertConfig:
-        """The expert that takes over: its belt's preset with the ``expert`` changes."""
-        return changed(expert_preset(get_variant(self.variant).task_config.tracking), self.expert)
+        """The expert that takes over: its belt's preset, ``turn_to_box`` and the ``expert`` changes."""
+        preset = replace(expert_preset(get_variant(self.variant).task_config.tracking), turn_to_box=self.turn_to_box)
+        return changed(preset, self.expert)
 
 
 @dataclass
