@@ -100,8 +100,8 @@ def trace(runner: EpisodeRunner, seed: int, serial: int) -> None:
         for box in cell.boxes_in_play():
             pos = cell.box_pos(box)
             near = np.hypot(cup[0] - pos[0], cup[1] - pos[1])
-            held = seal.held is not None and cell.boxes[seal.held].serial == serial
             if box.serial == serial and near < 0.05:
+                held = seal.held is not None and cell.boxes[seal.held].serial == serial
                 print(f"| {step} | {1000 * (cup[2] - pos[2] - layout.box_size / 2):.1f} | {1000 * near:.0f} "
                       f"| {'on' if seal.commanded else 'off'} | {'yes' if held else 'no'} |")
 
