@@ -263,10 +263,11 @@ def test_outcomes_by_pose_counts_boxes_by_how_the_cup_held_them(tmp_path):
     assert "1 dropped: 1 never picked, 0 lost after the cup picked them" in lines
     assert ("how the cup held the 3 boxes it picked: gripped off axis median 12.0 mm, 90th percentile 26.0 mm; "
             "gripped turned median 8.0 deg, 90th percentile 22.0 deg") in lines
-    assert lines[-7:] == ["| gripped off axis 0 to 5 mm | 1 | 0 (0%) | 0 |",
+    assert lines[-8:] == ["| gripped off axis 0 to 5 mm | 1 | 0 (0%) | 0 |",
                           "| gripped off axis 5 to 10 mm | 0 | 0 (-) | 0 |",
                           "| gripped off axis 10 to 20 mm | 1 | 1 (100%) | 0 |",
-                          "| gripped off axis 20 to 60 mm | 1 | 1 (100%) | 0 |",
+                          "| gripped off axis 20 to 30 mm | 1 | 1 (100%) | 0 |",
+                          "| gripped off axis 30 to 60 mm | 0 | 0 (-) | 0 |",
                           "| gripped turned 0 to 5 deg | 1 | 0 (0%) | 0 |",
                           "| gripped turned 5 to 15 deg | 1 | 1 (100%) | 0 |",
                           "| gripped turned 15 to 45 deg | 1 | 1 (100%) | 0 |"]

@@ -26,7 +26,8 @@ from colorsort.variants import get_variant
 
 YAW_BANDS = ((0.0, 15.0), (15.0, 30.0), (30.0, 45.0))  # [deg] |yaw|
 OFFSET_BANDS = ((-0.05, -0.025), (-0.025, 0.0), (0.0, 0.025), (0.025, 0.05))  # [m], + toward the bins
-GRIP_OFFSET_BANDS = ((0.0, 0.005), (0.005, 0.01), (0.01, 0.02), (0.02, 0.06))  # [m] off the cup's axis
+# [m] off the cup's axis; past 25 mm the axis is beyond the edge of the box (a 5 cm cube)
+GRIP_OFFSET_BANDS = ((0.0, 0.005), (0.005, 0.01), (0.01, 0.02), (0.02, 0.03), (0.03, 0.06))
 GRIP_YAW_BANDS = ((0.0, 5.0), (5.0, 15.0), (15.0, 45.0))  # [deg] |turn| against the cup
 BRIGHTNESS_BANDS = ((0.5, 0.65), (0.65, 0.8), (0.8, 1.0), (1.0, 1.6))  # x the cell's own lights
 HEADER = ["| band | boxes | in a wrong bin | dropped |", "| --- | --- | --- | --- |"]
