@@ -14,8 +14,11 @@ cup about 25 mm over it, so a box never sealed with the cup lower than that was 
 never sealed above it was not reached. Episode k runs with the variant's k-th evaluation seed (or ``--seed`` + k),
 as colorsort-eval's.
 ``--expert NAME:VALUE,...`` changes the expert's settings from its belt's preset, as colorsort-collect's does.
-``--trace SEED,BOX`` prints instead, for box number BOX (0 the first to appear) of the episode of env seed SEED,
-every control step with the cup's axis within 50 mm of it: the cup's height over its top, suction, the seal.
+``--releases`` prints instead where the cup let go of each box: per colour and outcome, the cup's y at the release
+from the centre of the box's own bin (median and range, mm; + away from the belt; the bins stand 325 mm apart,
+310 mm wide, red nearest the belt). ``--trace SEED,BOX`` prints instead, for box number BOX (0 the first to
+appear) of the episode of env seed SEED, every control step with the cup's axis within 50 mm of it: the cup's
+height over its top, suction, the seal.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import numpy as np  # noqa: E402
 from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, episode_seeds, observation_settings  # noqa: E402
 from colorsort.benchmark.outcomes import OFFSET_BANDS  # noqa: E402
 from colorsort.benchmark.policies import ExpertPolicy  # noqa: E402
+from colorsort.config import BIN_COLORS  # noqa: E402
 from colorsort.expert.config import changed, expert_preset, parse_changes  # noqa: E402
 from colorsort.results import recorded  # noqa: E402
 from colorsort.variants import get_variant  # noqa: E402
@@ -88,6 +92,34 @@ def descents(runner: EpisodeRunner, seed: int) -> list[Descent]:
             for e in cell.events[: runner.env.variant.boxes]]
 
 
+def releases(runner: EpisodeRunner, seed: int) -> list[tuple[str, str, float]]:
+    """One episode: (colour, outcome, the cup's y at the release from the centre of the colour's bin [m]) per box
+    the cup let go of."""
+    cell = runner.env.env
+    let_go: dict[int, tuple[str, float]] = {}
+    before = None
+    for _ in played(runner, seed):
+        seal = cell.plant.seal
+        held = cell.boxes[seal.held] if seal.held is not None else None
+        if before is not None and held is not before and before.color in BIN_COLORS:
+            bin_y = cell.layout.bin_center(BIN_COLORS.index(before.color))[1]
+            let_go.setdefault(before.serial, (before.color, float(cell.plant.data.xpos[seal.cup][1] - bin_y)))
+        before = held
+    outcome = {e.serial: e.outcome.value for e in cell.events}
+    return [(color, outcome.get(serial, "in play"), dy) for serial, (color, dy) in let_go.items()]
+
+
+def release_table(who: str, variant: str, episodes: int, boxes: list[tuple[str, str, float]]) -> None:
+    """Print ``releases``' rows of every episode, grouped by colour and outcome."""
+    print(f"{who} on {variant}, {episodes} episodes, {len(boxes)} boxes let go")
+    print("| colour | outcome | boxes | the cup's y at the release from its bin's centre [mm]: median (range) |")
+    print("| --- | --- | --- | --- |")
+    for color in BIN_COLORS:
+        for outcome in sorted({o for c, o, _ in boxes if c == color}):
+            ys = [1000 * dy for c, o, dy in boxes if (c, o) == (color, outcome)]
+            print(f"| {color} | {outcome} | {len(ys)} | {np.median(ys):.0f} ({min(ys):.0f} to {max(ys):.0f}) |")
+
+
 def trace(runner: EpisodeRunner, seed: int, serial: int) -> None:
     """Print the steps of episode ``seed`` in which the cup passes within 50 mm of box ``serial``'s centre."""
     cell = runner.env.env
@@ -121,6 +153,7 @@ def main() -> None:
     p.add_argument("--episodes", type=int, default=10)
     p.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's evaluation seeds)")
     p.add_argument("--trace", default=None, metavar="SEED,BOX", help="step by step over one box of one episode")
+    p.add_argument("--releases", action="store_true", help="where the cup let go of each box, by colour and outcome")
     p.add_argument("--expert", default=None, metavar="NAME:VALUE,...",
                    help="with --policy expert: its settings changed from its preset")
     args = p.parse_args()
@@ -132,16 +165,23 @@ def main() -> None:
     if args.expert:
         runner.policy = ExpertPolicy(changed(expert_preset(variant.task_config.tracking), parse_changes(args.expert)))
     boxes: list[Descent] = []
+    let_go: list[tuple[str, str, float]] = []
     try:
         if args.trace:
             seed, serial = (int(t) for t in args.trace.split(","))
             trace(runner, seed, serial)
             return
-        for seed in episode_seeds(variant, args.episodes, args.seed):
-            boxes += descents(runner, seed)
+        seeds = episode_seeds(variant, args.episodes, args.seed)
+        if args.releases:
+            let_go = [box for seed in seeds for box in releases(runner, seed)]
+        else:
+            boxes = [box for seed in seeds for box in descents(runner, seed)]
     finally:
         runner.close()
     who = f"expert ({args.expert})" if args.expert else args.policy
+    if args.releases:
+        release_table(who, variant.name, args.episodes, let_go)
+        return
     print(f"{who} on {variant.name}, {args.episodes} episodes, {len(boxes)} boxes")
     print("| offset [cm] | boxes | never sealed | lowest [mm], sealed: median (range) | lowest [mm], never sealed "
           "| the seal's axis from the centre [mm]: downstream, toward the bins |")
