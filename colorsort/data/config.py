@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
 from colorsort.data.perturbations import Perturbation, canonical
 from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
-from colorsort.expert.config import ExpertConfig, changed, expert_preset
+from colorsort.expert.config import ExpertConfig, recording_expert
 from colorsort.robots import get_robot
 from colorsort.variants import get_variant
 
@@ -103,8 +103,7 @@ class CollectConfig:
     @property
     def expert_config(self) -> ExpertConfig:
         """The expert that records: its belt's preset, ``turn_to_box`` and the ``expert`` changes."""
-        preset = replace(expert_preset(self.task_config.tracking), turn_to_box=self.turn_to_box)
-        return changed(preset, self.expert)
+        return recording_expert(self.task_config.tracking, self.turn_to_box, self.expert)
 
     @property
     def task_config(self) -> TaskConfig:

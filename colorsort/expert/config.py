@@ -117,6 +117,11 @@ def expert_preset(tracking: bool) -> ExpertConfig:
 CHANGEABLE = tuple(f.name for f in fields(ExpertConfig) if f.type in ("float", "int"))
 
 
+def recording_expert(tracking: bool, turn_to_box: bool, changes: tuple[tuple[str, float], ...]) -> ExpertConfig:
+    """The expert a collection or DAgger's labels use: the belt's preset, ``turn_to_box`` and the ``changes``."""
+    return changed(replace(expert_preset(tracking), turn_to_box=turn_to_box), changes)
+
+
 def changed(config: ExpertConfig, changes: tuple[tuple[str, float], ...]) -> ExpertConfig:
     """``config`` with the (name, value) ``changes`` made, each checked as the dataclass checks it.
 

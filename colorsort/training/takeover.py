@@ -13,7 +13,7 @@ the demos' (``schema.features``), so LeRobot's ``aggregate_datasets`` merges the
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +25,7 @@ from colorsort.cell.privileged import take_over_view
 from colorsort.data.config import CollectConfig, check_vcodec
 from colorsort.data.schema import features, frame
 from colorsort.errors import ConfigError
-from colorsort.expert.config import ExpertConfig, changed, expert_preset
+from colorsort.expert.config import ExpertConfig, recording_expert
 from colorsort.expert.factory import make_expert
 from colorsort.variants import get_variant
 
@@ -81,8 +81,7 @@ class TakeoverConfig:
     @property
     def expert_config(self) -> ExpertConfig:
         """The expert that takes over: its belt's preset, ``turn_to_box`` and the ``expert`` changes."""
-        preset = replace(expert_preset(get_variant(self.variant).task_config.tracking), turn_to_box=self.turn_to_box)
-        return changed(preset, self.expert)
+        return recording_expert(get_variant(self.variant).task_config.tracking, self.turn_to_box, self.expert)
 
 
 @dataclass
