@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from colorsort.config import BIN_COLORS
 from colorsort.expert.base import Cycle
 from colorsort.expert.config import TRACKING_EXPERT, changed
 from colorsort.expert.factory import make_expert
@@ -63,6 +64,31 @@ def test_a_longer_hold_keeps_the_sealed_box_on_the_moving_belt_for_it_and_every_
         assert [e.outcome for e in env.events[:2]] == ["placed"] * 2, env.events
         held_on_belt[hold] = steps / 2
     assert held_on_belt[TRACKING_EXPERT.track_hold_time] <= 1 and held_on_belt[0.15] >= 3
+
+
+def test_a_smaller_drop_spread_lets_go_nearer_each_bins_centre_and_every_box_still_lands(make_env):
+    """``drop_spread`` draws the release points in toward each bin's centre: the cup lets go up to 180 mm from
+    it with the preset (its quickest slots lie toward a corner on the bin's near side), within 50 mm at 0.25 of
+    the room, and both place every box in its bin."""
+    farthest = {}
+    for spread in (TRACKING_EXPERT.drop_spread, 0.25):
+        env = tracking_env(make_env, ignore_done=True)
+        obs = env.reset(seed=1)
+        expert = make_expert(env, changed(TRACKING_EXPERT, (("drop_spread", spread),)))
+        expert.reset(obs)
+        seal, data, layout = env.plant.seal, env.plant.data, env.layout
+        off, before = [], None
+        while len(env.events) < 3 and env.cur_time < 25.0:
+            obs, _, _, _ = env.step(expert.act(obs))
+            held = env.boxes[seal.held] if seal.held is not None else None
+            if before is not None and held is not before:  # let go: the cup from the centre of the box's bin
+                centre = layout.bin_center(BIN_COLORS.index(before.color))
+                off.append(float(np.hypot(*(data.xpos[seal.cup][:2] - centre))))
+            before = held
+        assert [e.outcome for e in env.events[:3]] == ["placed"] * 3, env.events
+        assert len(off) >= 3
+        farthest[spread] = max(off)
+    assert farthest[TRACKING_EXPERT.drop_spread] > 0.15 and farthest[0.25] < 0.05, farthest
 
 
 def test_a_box_the_arm_can_no_longer_meet_is_let_go_and_counted_as_dropped(make_env):

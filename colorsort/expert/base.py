@@ -283,13 +283,14 @@ class Expert:
     def _drop_slots(self, color: str, index: int) -> list[np.ndarray]:
         """Joint angles of up to ``drop_slots`` release points over a bin, the least ``slot_cost`` first.
 
-        Candidates lie on a grid inside the bin, far enough from its walls for a box of any yaw;
-        those the arm cannot reach are skipped (the Panda reaches less far than the IRB 140).
+        Candidates lie on a grid inside the bin, far enough from its walls for a box of any yaw, spanning
+        ``drop_spread`` of that room about the bin's centre; those the arm cannot reach are skipped (the Panda
+        reaches less far than the IRB 140).
         """
         L, cfg = self.layout, self.config
         bx, by = L.bin_center(index)
         margin = L.box_size / 2 + 0.01 + L.bin_wall  # an axis-aligned box 1 cm clear of the walls
-        hx, hy = L.bin_size[0] / 2 - margin, L.bin_size[1] / 2 - margin
+        hx, hy = (cfg.drop_spread * (L.bin_size[k] / 2 - margin) for k in (0, 1))
         z = L.bin_size[2] + cfg.drop_clearance + L.box_size
         grid = [(bx + dx, by + dy) for dx in np.linspace(-hx, hx, 4) for dy in np.linspace(-hy, hy, 3)]
         reachable = []

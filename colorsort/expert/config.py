@@ -24,6 +24,9 @@ class ExpertConfig:
         drop_clearance: [m] box bottom above a bin's rim at release.
         wait_offset_y: [m] the wait pose lies this far from the belt centre, toward the bins (out of view).
         drop_slots: release points per bin, used in turn so that boxes do not pile up.
+        drop_spread: the fraction of a bin's floor (clear of its walls) the candidate release points span,
+            about its centre: 1 spreads them to 1 cm from the walls, lower draws them in, so that the quickest
+            slots lie nearer the centre (a policy that lets go a little short or long still hits the bin).
         wait_tolerance: [rad] max joint error that counts as arrived at the wait pose.
         approach_tolerance: [rad] the same over the box and on it (the cup must sit flat).
         lift_tolerance: [rad] the same at the top of the lift.
@@ -59,6 +62,7 @@ class ExpertConfig:
     drop_clearance: float = 0.12
     wait_offset_y: float = 0.205
     drop_slots: int = 4
+    drop_spread: float = 1.0
     wait_tolerance: float = 0.02
     approach_tolerance: float = 0.01
     lift_tolerance: float = 0.05
@@ -82,6 +86,7 @@ class ExpertConfig:
         check_range("drop_clearance", self.drop_clearance, 0.0, 0.5)
         check_range("wait_offset_y", self.wait_offset_y, 0.0, 0.5)
         check_range("drop_slots", self.drop_slots, 1, 12)
+        check_range("drop_spread", self.drop_spread, 0.0, 1.0)
         for name in ("wait_tolerance", "approach_tolerance", "lift_tolerance", "drop_tolerance"):
             check_range(name, getattr(self, name), 0.001, 0.5)
         check_range("grip_timeout", self.grip_timeout, 0.05, 10.0)
