@@ -136,7 +136,7 @@ def test_sort_cli_bad_arguments_exit_2(argv, capsys):
 
 @pytest.mark.parametrize("kwargs,name", [
     (dict(carry_z=2.0), "carry_z"), (dict(drop_slots=0), "drop_slots"), (dict(wait_tolerance=0.0), "wait_tolerance"),
-    (dict(grip_timeout=-1.0), "grip_timeout"),
+    (dict(grip_timeout=-1.0), "grip_timeout"), (dict(drop_spread=1.5), "drop_spread"),
 ])
 def test_expert_config_refuses_values_out_of_range_naming_them(kwargs, name):
     from colorsort.expert.config import ExpertConfig
