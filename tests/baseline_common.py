@@ -16,7 +16,8 @@ REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 SHIPPED = {name: REPO / "baselines" / name
            for name in ("act-state", "act-camera", "act-camera-snapshot", "act-camera-tracking",
-                        "act-camera-tracking-fast-dagger", "act-camera-tracking-dagger", "diffusion-camera-snapshot")}
+                        "act-camera-tracking-fast-dagger", "act-camera-tracking-dagger",
+                        "act-camera-tracking-dip-dagger", "diffusion-camera-snapshot")}
 
 
 def run(argv: list[str], cwd: Path, timeout: float) -> subprocess.CompletedProcess:
