@@ -476,3 +476,8 @@ def test_the_headline_compares_methods_with_their_size_and_where_they_trained(tm
     assert "20 min on a GPU |" in line
     row = headline(REPO / "baselines").splitlines()[2:]
     assert any(r.startswith("| [`act-state`](baselines/act-state/README.md) | ACT | state | 0.7 M |") for r in row)
+    # demos from an expert changed from its preset say how, as colorsort-baseline's --demos.expert takes it
+    recipe["demos"]["expert"] = [["press", 0.01], ["track_hold_time", 0.15]]
+    (tmp_path / "baselines" / "dp" / "scores.json").write_text(json.dumps(scores([score_row()], recipe)))
+    (line,) = headline(tmp_path / "baselines", tmp_path / "docs").splitlines()[2:]
+    assert " demos (expert `press:0.01,track_hold_time:0.15`), " in line

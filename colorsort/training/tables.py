@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from colorsort.errors import ConfigError
+from colorsort.expert.config import changes_text
 from colorsort.training.methods import method_name
 from colorsort.training.records import Results, ScoreRow
 from colorsort.training.report import curve_table, scored_checkpoints, span, summary_table
@@ -127,8 +128,9 @@ def mistakes_table(rows: Sequence[ScoreRow]) -> str:
 
 def headline(folder: Path, links_from: Path | None = None) -> str:
     """A Markdown table: per baseline in ``folder`` (each subfolder with a ``scores.json``), its method, inputs,
-    parameters, training and success per variant; with several training seeds, their mean, range and how many.
-    Each baseline links its README, relative to the folder ``links_from`` (default: ``folder``'s parent)."""
+    parameters, training (with the demos' expert settings where they differ from its preset) and success per
+    variant; with several training seeds, their mean, range and how many. Each baseline links its README, relative
+    to the folder ``links_from`` (default: ``folder``'s parent)."""
     links_from = folder.parent if links_from is None else links_from
     lines = ["| baseline | method | inputs | parameters | training | success on each variant (one seed: 95% CI, "
              "episodes; several: mean and range over the seeds) |", "| --- | --- | --- | --- | --- | --- |"]
@@ -141,7 +143,9 @@ def headline(folder: Path, links_from: Path | None = None) -> str:
         minutes = [r.scored_minutes for r in runs]
         chosen = (f", scored at {scored_checkpoints(runs)} (chosen on validation seeds)"
                   if any(r.checkpoint is not None for r in runs) else "")
-        training = (f"{first.demos} demos, {first.steps} updates{chosen}, {span(minutes)} min {machine(scores)}"
+        expert = section(scores, "demos").get("expert")  # the expert's settings changed from its preset, if any
+        demos = f"{first.demos} demos" + (f" (expert `{changes_text(expert)}`)" if expert else "")
+        training = (f"{demos}, {first.steps} updates{chosen}, {span(minutes)} min {machine(scores)}"
                     + (f" per seed, {len(runs)} seeds" if len(runs) > 1 else ""))
         name = path.parent.name
         method, _, inputs = label(scores).partition(", ")
