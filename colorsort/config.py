@@ -10,6 +10,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from colorsort.errors import ConfigError
 
 # Box and bin colours the cell knows, as RGBA in [0, 1]. Red, green and blue have bins.
@@ -21,6 +23,15 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
     "purple": (0.55, 0.15, 0.65, 1.0),
 }
 BIN_COLORS: tuple[str, ...] = ("red", "green", "blue")
+BOX, CYLINDER = 6, 5  # MuJoCo's mjGEOM_BOX and mjGEOM_CYLINDER (tests/test_shifts.py holds them to mujoco's)
+# Colours no variant and no recipe has: the ``novel-distractors`` shift's objects (``colorsort.shifts``). A task
+# config cannot name them, and they have no place in the ``next_box`` one-hot, so no policy ever trains on them.
+NOVEL_COLORS: dict[str, tuple[float, float, float, float]] = {
+    "white": (0.92, 0.92, 0.90, 1.0),
+    "black": (0.08, 0.08, 0.09, 1.0),
+    "cyan": (0.10, 0.75, 0.80, 1.0),
+}
+ALL_COLORS: dict[str, tuple[float, float, float, float]] = {**COLORS, **NOVEL_COLORS}  # sim-state colour indices
 @dataclass(frozen=True)
 class CellLayout:
     """Where things stand, in the world frame [m]; the robot base is at the origin on the floor.
@@ -59,6 +70,32 @@ class CellLayout:
     def bin_center(self, index: int) -> tuple[float, float]:
         """(x, y) of bin ``index`` (0 = red, 1 = green, 2 = blue)."""
         return (self.bin_x, self.bin_y0 + index * self.bin_spacing)
+
+
+@dataclass(frozen=True)
+class BoxStyle:
+    """A box's shape, when it is not the cell's cube: a ``"box"`` of ``width`` x ``width`` x ``height`` [m] or an
+    upright ``"cylinder"`` (a puck) of diameter ``width`` and ``height`` [m]; both have a flat top."""
+
+    shape: str
+    width: float
+    height: float
+
+    def geometry(self) -> tuple[int, tuple[float, float, float], float, tuple[float, float, float]]:
+        """MuJoCo's geom type, size, bounding radius and axis-aligned half-extents of this style."""
+        w, h = self.width / 2, self.height / 2
+        if self.shape == "cylinder":
+            return CYLINDER, (w, h, 0.0), float(np.hypot(w, h)), (w, w, h)
+        return BOX, (w, w, h), float(np.sqrt(2 * w * w + h * h)), (w, w, h)
+
+    def inertia(self, mass: float) -> tuple[float, float, float]:
+        """Principal moments [kg m^2] of a solid body of this style and ``mass`` [kg]."""
+        w, h = self.width, self.height
+        if self.shape == "cylinder":
+            r2 = (w / 2) ** 2
+            side = mass * (3 * r2 + h * h) / 12
+            return side, side, mass * r2 / 2
+        return mass * (w * w + h * h) / 12, mass * (w * w + h * h) / 12, mass * w * w / 6
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,9 @@ from colorsort.robots import get_robot
 EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
 # for choosing among a training run's checkpoints (``colorsort.training.selection``): never scored, never collected
 VALIDATION_SEEDS: tuple[int, ...] = tuple(range(20_000, 20_050))
+# for held-out shifts (``colorsort.shifts``) and their control arm: apart from evaluation, validation, DAgger's
+# take-overs (40,000 on) and the demos (k x 1,000,000 + i)
+SHIFT_SEEDS: tuple[int, ...] = tuple(range(30_000, 30_050))
 
 LIGHT_BRIGHTNESS = (0.5, 1.6)  # the ``lighting`` variant's range of light intensity, x the cell's own
 

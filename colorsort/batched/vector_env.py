@@ -15,6 +15,7 @@ and the finished episode's ``info`` under ``info["final_info"]``), with the next
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any
 
 import gymnasium as gym
@@ -29,7 +30,16 @@ from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.cell.cameras import DEFAULT_IMAGE_SIZE
 from colorsort.cell.referee import Outcome
 from colorsort.errors import ConfigError
+from colorsort.shifts import parse_shifts
 from colorsort.variants import Variant, get_variant
+
+
+def refuse_shifts(shift: str | Iterable[str] | None) -> None:
+    """ValueError for any held-out shift above level 0: the batched cell applies none yet (``docs/shifts.md``)."""
+    active = [str(s) for s in parse_shifts(shift) if s.level > 0]
+    if active:
+        raise ConfigError(f"the batched cell (MuJoCo Warp) applies no held-out shift yet; asked: {', '.join(active)}. "
+                          "Run shifts on the CPU cell: gym.make(id, shift=...), colorsort-eval --backend cpu")
 
 
 class BatchedVectorEnv(gym.vector.VectorEnv):
@@ -43,6 +53,7 @@ class BatchedVectorEnv(gym.vector.VectorEnv):
         episode_length: steps before truncation; default: the variant's time limit.
         render_mode: "rgb_array" (``render`` gives every env's scene camera at ``image_size``) or None.
         fps: the control rate [Hz]; the batched cell runs at the CPU cell's default, 20.
+        shift: held-out shifts: any above level 0 is refused (the batched cell applies none yet).
         spec: the variant's cell, if already built (``CellSpec``).
     """
 
@@ -51,7 +62,8 @@ class BatchedVectorEnv(gym.vector.VectorEnv):
     def __init__(self, variant: str | Variant = "default", num_envs: int = 8, device: str = "cpu",
                  cameras: tuple[str, ...] = (), image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE,
                  episode_length: int | None = None, render_mode: str | None = None, spec: CellSpec | None = None,
-                 fps: int = 20):
+                 fps: int = 20, shift: str | Iterable[str] | None = None):
+        refuse_shifts(shift)
         self.variant = get_variant(variant) if isinstance(variant, str) else variant
         single = ColorSortGymEnv(self.variant, cameras=tuple(cameras), image_size=(image_size[0], image_size[1]),
                                  render_mode=None,

@@ -28,16 +28,20 @@ from colorsort.executors.base import (
     forwarded_env,
 )
 from colorsort.executors.factory import make_executor
-from colorsort.variants import Variant, get_variant
+from colorsort.shifts import parse_shifts, shift_label
+from colorsort.variants import SHIFT_SEEDS, Variant, get_variant
 
 
-def episode_seeds(variant: Variant, episodes: int, seed: int | None) -> list[int]:
+def episode_seeds(variant: Variant, episodes: int, seed: int | None, shifted: bool = False) -> list[int]:
+    """Episode k's seed: ``seed + k``, else the variant's k-th evaluation seed, or with ``shifted`` (held-out
+    shifts and their control arm) the k-th of ``SHIFT_SEEDS``, which no training, validation or evaluation uses."""
     if seed is not None:
         return [seed + k for k in range(episodes)]
-    if episodes > len(variant.seeds):
-        raise ConfigError(f"variant {variant.name!r} has {len(variant.seeds)} evaluation seeds; "
+    seeds, kind = (SHIFT_SEEDS, "shift evaluation") if shifted else (variant.seeds, "evaluation")
+    if episodes > len(seeds):
+        raise ConfigError(f"variant {variant.name!r} has {len(seeds)} {kind} seeds; "
                          f"for {episodes} episodes pass --seed S (seeds S..S+{episodes - 1})")
-    return list(variant.seeds[:episodes])
+    return list(seeds[:episodes])
 
 
 @dataclass(frozen=True)
@@ -50,6 +54,7 @@ class EvalSettings:
     cameras: tuple[str, ...] = DEFAULT_CAMERAS
     episode_length: int | None = None  # steps before truncation; None: the variant's time limit
     film: bool = False  # film every episode (``filming.py``): its mp4 bytes under "video" in its result
+    shift: tuple[str, ...] = ()  # held-out shifts, ``NAME:LEVEL`` (``colorsort.shifts``); the env applies them
 
 
 # torch threads of a learned policy in each env's process: with torch's default (one per core) envs
@@ -71,7 +76,8 @@ class EpisodeRunner:
         self.film = settings.film
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
                                    image_size=settings.image_size, episode_length=settings.episode_length,
-                                   render_mode="rgb_array" if settings.film else None)  # a GL context to film with
+                                   render_mode="rgb_array" if settings.film else None,  # a GL context to film with
+                                   shift=settings.shift)
 
     def close(self) -> None:
         """Close the env; give this process back the torch threads it had (it may be the caller's)."""
@@ -108,6 +114,8 @@ class EpisodeRunner:
         result = {"seed": seed, "success": bool(info["is_success"]), "ended": ended, "steps": self.env.steps,
                   **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through", "distractors", "sim_time",
                                           "sorted_times")}, "boxes": boxes}
+        if self.env.env.shifts.record:
+            result["shift"] = self.env.env.shifts.record  # each shift's level and the values drawn for this episode
         if film is not None:
             result["video"] = film.finish()
         return result
@@ -162,7 +170,8 @@ def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(
     Raises:
         RuntimeError: a job failed (its traceback), or the run was interrupted.
     """
-    tasks = [Task(f"{j.settings.variant}:{j.seeds[0]}", run_job, j) for j in jobs]
+    tasks = [Task(f"{j.settings.variant}:{shift_label(parse_shifts(j.settings.shift))}:{j.seeds[0]}", run_job, j)
+             for j in jobs]
     bar = tqdm(total=sum(len(j.seeds) for j in jobs), desc=desc, unit="episode", disable=not progress)
     try:
         results = make_executor(executor, PRELOAD, forwarded_env()).run(tasks, lambda _: bar.update())
@@ -186,25 +195,28 @@ def run_evaluation(policy_spec: str, variant_names: list[str], episodes: int, *,
                    image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, cameras: tuple[str, ...] = DEFAULT_CAMERAS,
                    progress: bool = True, episode_length: int | None = None,
                    executor: ExecutorConfig = ExecutorConfig(), shard_size: int = DEFAULT_SHARD_SIZE,
-                   film: bool = False) -> Evaluation:
+                   film: bool = False, shift: tuple[str, ...] = ()) -> Evaluation:
     """``episodes`` episodes of a policy on each variant, all spread over ``executor`` in jobs of at most
-    ``shard_size`` episodes; with ``film``, every episode is filmed in the process that runs it."""
+    ``shard_size`` episodes; with ``film``, every episode is filmed in the process that runs it; with ``shift``
+    (``NAME:LEVEL`` texts), under those held-out shifts, on ``SHIFT_SEEDS`` unless ``seed`` is given."""
     check_policy_spec(policy_spec)
+    shift = tuple(str(s) for s in parse_shifts(shift))
     variants = [get_variant(name) for name in variant_names]
     path = policy_spec if policy_spec in ("expert", "random") else str(Path(policy_spec).resolve())  # for any worker
     jobs, owner = [], []
     per_variant = max(1, executor.workers // len(variants))  # jobs per variant that keep every worker busy
     for k, variant in enumerate(variants):
         settings = EvalSettings(path, variant.name, (image_size[0], image_size[1]), tuple(cameras), episode_length,
-                                film)
-        for block in chunks(episode_seeds(variant, episodes, seed), shard_size, per_variant):
+                                film, shift)
+        for block in chunks(episode_seeds(variant, episodes, seed, bool(shift)), shard_size, per_variant):
             jobs.append(EvalJob(settings, tuple(block)))
             owner.append(k)
     results, _ = run_episodes(jobs, executor, progress, desc=f"{policy_spec} on {', '.join(variant_names)}")
     films = {(job.settings.variant, r["seed"]): r.pop("video") for job, rs in zip(jobs, results, strict=True)
              for r in rs if "video" in r}
     per = [[r for job, rs in zip(owner, results, strict=True) if job == k for r in rs] for k in range(len(variants))]
-    reports = [aggregate(str(policy_spec), v.name, rs) for v, rs in zip(variants, per, strict=True)]
+    label = shift_label(parse_shifts(shift))
+    reports = [aggregate(str(policy_spec), v.name, rs, label) for v, rs in zip(variants, per, strict=True)]
     return Evaluation(reports, films)
 
 

@@ -18,6 +18,7 @@ it belongs) or at the first box misplaced or dropped; it is truncated at the var
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any
 
 import gymnasium as gym
@@ -31,6 +32,7 @@ from colorsort.config import is_distractor
 from colorsort.data.schema import ENV_STATE_SIZE, box_state, robot_state, state_size
 from colorsort.errors import ConfigError
 from colorsort.robots import ROBOTS
+from colorsort.shifts import parse_shifts
 from colorsort.variants import Variant, get_variant, gym_ids
 
 
@@ -50,6 +52,8 @@ class ColorSortGymEnv(gym.Env):
         render_mode: "rgb_array" (the scene camera at ``image_size``) or None.
         episode_length: truncate after this many steps; default: the variant's time limit.
             (``gym.make(..., max_episode_steps=N)`` adds Gymnasium's own ``TimeLimit`` on top.)
+        shift: held-out shifts (``NAME:LEVEL``, a list or one comma-separated string; ``docs/shifts.md``) applied
+            by the robosuite env to every episode; nothing of them shows in observations, ``task`` or ``info``.
     """
 
     action_space: spaces.Box  # joint targets [rad], suction, belt pass
@@ -58,8 +62,9 @@ class ColorSortGymEnv(gym.Env):
 
     def __init__(self, variant: str | Variant = "default", cameras: tuple[str, ...] = DEFAULT_CAMERAS,
                  image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, fps: int = 20, render_mode: str | None = "rgb_array",
-                 episode_length: int | None = None):
+                 episode_length: int | None = None, shift: str | Iterable[str] | None = None):
         self.variant = get_variant(variant) if isinstance(variant, str) else variant
+        self.shift = tuple(str(s) for s in parse_shifts(shift))  # validated here, applied by the robosuite env
         if render_mode not in (None, "rgb_array"):
             raise ConfigError(f"render_mode={render_mode!r}; valid modes: [None, 'rgb_array']")
         check_cameras(cameras)
@@ -108,7 +113,7 @@ class ColorSortGymEnv(gym.Env):
                                   use_camera_obs=bool(self.cameras),
                                   has_offscreen_renderer=bool(self.cameras) or self.render_mode is not None,
                                   camera_names=list(self.cameras) or "scene", camera_heights=h, camera_widths=w,
-                                  control_freq=self.fps, ignore_done=True)
+                                  control_freq=self.fps, ignore_done=True, shift=self.shift)
         return self._env
 
     # ------------------------------------------------------------------ gym API

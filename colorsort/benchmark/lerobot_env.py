@@ -11,6 +11,7 @@ installs the plugin distribution ``lerobot_env_colorsort``, which LeRobot's CLIs
 ``--env.task`` is a Gymnasium id without the ``colorsort/`` namespace (``ColorSort-v0`` or a
 variant's, see ``colorsort-eval --list``); ``--env.cameras`` and ``--env.image_size`` must match
 the dataset the policy was trained on (``--env.cameras=none`` for a state-only policy).
+``--env.shift=camera-pose:2`` (comma-separated ``NAME:LEVEL``, docs/shifts.md) evaluates under held-out shifts;
 ``--env.backend=warp`` runs the ``--eval.batch_size`` envs as one batched cell on MuJoCo Warp
 (``--env.device``, cuda:0 by default; the ``gpu`` extra; docs/gpu.md).
 """
@@ -27,6 +28,7 @@ from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_ca
 from colorsort.data.schema import ENV_STATE_SIZE, state_size
 from colorsort.errors import ConfigError
 from colorsort.robots import ROBOTS
+from colorsort.shifts import parse_shifts
 from colorsort.variants import Variant, get_variant, gym_ids
 
 NAMESPACE = "colorsort"
@@ -55,6 +57,7 @@ class ColorSortEnv(EnvConfig):
     episode_length: int | None = None  # steps before truncation; default: the variant's time limit
     backend: str = "cpu"  # "cpu": one ColorSortGymEnv per env; "warp": one batched cell (colorsort.batched)
     device: str = "cuda:0"  # the batched cell's Warp device (backend warp): cuda:0, or cpu
+    shift: str = ""  # held-out shifts, comma-separated NAME:LEVEL (docs/shifts.md); "" for none
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
@@ -63,6 +66,7 @@ class ColorSortEnv(EnvConfig):
             raise ConfigError("--env.task: give a ColorSort task, e.g. ColorSort-Default-v0 (colorsort-eval --list)")
         if self.backend not in BACKENDS:
             raise ConfigError(f"--env.backend={self.backend!r}; valid backends: {list(BACKENDS)}")
+        parse_shifts(self.shift)  # ValueError naming the valid shifts and levels
         variant = variant_of_task(self.task)
         n = ROBOTS[variant.robot].n_joints
         self.features = {
@@ -102,5 +106,6 @@ class ColorSortEnv(EnvConfig):
 
     @property
     def gym_kwargs(self) -> dict:
-        return {"cameras": self.camera_list, "image_size": (self.image_size, self.image_size), "fps": self.fps,
-                "episode_length": self.episode_length}
+        kwargs = {"cameras": self.camera_list, "image_size": (self.image_size, self.image_size), "fps": self.fps,
+                  "episode_length": self.episode_length}
+        return {**kwargs, "shift": self.shift} if self.shift else kwargs

@@ -32,6 +32,7 @@ class EvalReport:
     sim_time_s: float = 0.0
     seeds: list[int] = field(default_factory=list)
     per_episode: list[dict] = field(default_factory=list)
+    shift: str = "none"  # the held-out shifts applied (``colorsort.shifts``), e.g. "camera-pose:2"; "none": control
 
 
 def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
@@ -44,9 +45,9 @@ def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, flo
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-def aggregate(policy: str, variant: str, results: list[dict]) -> EvalReport:
+def aggregate(policy: str, variant: str, results: list[dict], shift: str = "none") -> EvalReport:
     """The report over per-episode results (``evaluate``'s per-episode dicts, in seed order)."""
-    report = EvalReport(policy=policy, variant=variant, seeds=[r["seed"] for r in results])
+    report = EvalReport(policy=policy, variant=variant, seeds=[r["seed"] for r in results], shift=shift)
     cycles: list[float] = []
     handled = 0
     for r in results:
@@ -70,7 +71,8 @@ def format_report(r: EvalReport) -> str:
     lo, hi = r.success_ci95
     cycle = f"{r.mean_cycle_time_s:.2f} s" if r.mean_cycle_time_s is not None else "-"
     rows = [
-        ("policy", r.policy), ("variant", r.variant), ("episodes", str(r.episodes)),
+        ("policy", r.policy), ("variant", r.variant), *((("shift", r.shift),) if r.shift != "none" else ()),
+        ("episodes", str(r.episodes)),
         ("success rate", f"{100 * r.success_rate:.1f}%  (95% CI {100 * lo:.1f}-{100 * hi:.1f}%)"),
         ("boxes placed correctly", str(r.correct)), ("misplaced", str(r.misplaced)), ("dropped", str(r.dropped)),
         ("distractors let through", f"{r.distractors_let_through}/{r.distractors}"),

@@ -44,7 +44,8 @@ class ExpertPolicy:
 
         self.env = env
         if getattr(self, "_for", None) is not env.env:  # the expert's IK and drop points: once per env
-            self.expert, self._for = make_expert(env.env, self.config), env.env
+            with env.env.shifts.cameras_as_built():  # calibrated where the camera was installed, as a real cell is
+                self.expert, self._for = make_expert(env.env, self.config), env.env
         self.expert.reset(env.raw_obs)
 
     def act(self, obs: dict[str, Any]) -> np.ndarray:

@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 
 from colorsort.cell.models.arena import park_position
-from colorsort.config import BIN_COLORS, COLORS, CellLayout
+from colorsort.config import ALL_COLORS, BIN_COLORS, BoxStyle, CellLayout
 
 
 class BoxStatus(Enum):
@@ -52,6 +52,14 @@ class BoxPool:
         self.geom = [model.geom(f"box{i}_geom").id for i in range(size)]
         self.qpos = [model.jnt_qposadr[model.joint(f"box{i}_joint").id] for i in range(size)]
         self.qvel = [model.jnt_dofadr[model.joint(f"box{i}_joint").id] for i in range(size)]
+        # What a held-out shift (``colorsort.shifts``) may change for an episode: the colour of each name, the
+        # style of every new box (None: the cube the model was compiled with); ``place`` may give one its own.
+        self.palette: dict[str, tuple[float, ...]] = dict(ALL_COLORS)
+        self.style: BoxStyle | None = None
+        self._styled: list[BoxStyle | None] = [None] * size
+        self._compiled = [(int(model.geom_type[g]), model.geom_size[g].copy(), float(model.geom_rbound[g]),
+                           model.geom_aabb[g].copy(), model.body_inertia[b].copy())
+                          for g, b in zip(self.geom, self.body, strict=True)]
 
     def in_play(self) -> list[Box]:
         """Boxes on the belt, in the cup or in the air."""
@@ -87,11 +95,18 @@ class BoxPool:
         self.model.body_gravcomp[self.body[box.index]] = 1.0
         box.status, box.bin, box.serial = BoxStatus.PARKED, None, -1
 
-    def place(self, box: Box, color: str, x: float, y: float, yaw: float, serial: int) -> None:
-        """Set a parked box down on the belt, centred at (x, y) [m], turned ``yaw`` [rad], 2 mm up."""
-        L = self.layout
+    def height(self, box: Box) -> float:
+        """[m] how tall a box stands."""
+        style = self._styled[box.index]
+        return self.layout.box_size if style is None else style.height
+
+    def place(self, box: Box, color: str, x: float, y: float, yaw: float, serial: int,
+              style: BoxStyle | None = None) -> None:
+        """Set a parked box down on the belt, centred at (x, y) [m], turned ``yaw`` [rad], 2 mm up; shaped as
+        ``style``, else the pool's ``style``."""
+        self.shape(box, style or self.style)
         qa, va = self.qpos[box.index], self.qvel[box.index]
-        z = L.belt_top_z + L.box_size / 2 + 0.002
+        z = self.layout.belt_top_z + self.height(box) / 2 + 0.002
         self.data.qpos[qa : qa + 7] = (x, y, z, np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2))
         self.data.qvel[va : va + 6] = 0.0
         self.paint(box, color)
@@ -101,7 +116,23 @@ class BoxPool:
 
     def paint(self, box: Box, color: str) -> None:
         box.color = color
-        self.model.geom_rgba[self.geom[box.index]] = COLORS[color]
+        self.model.geom_rgba[self.geom[box.index]] = self.palette[color]
+
+    def shape(self, box: Box, style: BoxStyle | None) -> None:
+        """Give a box the geometry (and the inertia, at its body's mass) of ``style``; None: as compiled."""
+        if style == self._styled[box.index]:
+            return
+        m, g, b = self.model, self.geom[box.index], self.body[box.index]
+        if style is None:
+            kind, size, rbound, aabb, inertia = self._compiled[box.index]
+            m.geom_type[g], m.geom_size[g], m.geom_rbound[g], m.geom_aabb[g], m.body_inertia[b] = (
+                kind, size, rbound, aabb, inertia)
+        else:
+            kind, size, rbound, half = style.geometry()
+            m.geom_type[g], m.geom_size[g], m.geom_rbound[g] = kind, size, rbound
+            m.geom_aabb[g] = (0.0, 0.0, 0.0, *half)
+            m.body_inertia[b] = style.inertia(float(m.body_mass[b]))
+        self._styled[box.index] = style
 
     def set_collidable(self, box: Box, on: bool) -> None:
         # MuJoCo's broad phase also filters on the per-body OR of its geoms' bits: set both.
@@ -116,15 +147,15 @@ class BoxPool:
         self.model.body_gravcomp[self.body[box.index]] = float(status is BoxStatus.PARKED)
 
     def get_state(self) -> np.ndarray:
-        """(pool size, 4) int, per box: colour (index in ``config.COLORS``, -1 while parked), status (index in
+        """(pool size, 4) int, per box: colour (index in ``config.ALL_COLORS``, -1 while parked), status (index in
         ``BoxStatus``), bin (index in ``BIN_COLORS``, -1 for none), serial. Poses are MuJoCo's state."""
-        colors, statuses = list(COLORS), list(BoxStatus)
+        colors, statuses = list(ALL_COLORS), list(BoxStatus)
         return np.array([(colors.index(b.color) if b.status is not BoxStatus.PARKED else -1, statuses.index(b.status),
                           BIN_COLORS.index(b.bin) if b.bin is not None else -1, b.serial) for b in self.boxes])
 
     def set_state(self, state: np.ndarray) -> None:
         """Every box as ``get_state`` saved it: bookkeeping, colour, collisions and gravity."""
-        colors, statuses = list(COLORS), list(BoxStatus)
+        colors, statuses = list(ALL_COLORS), list(BoxStatus)
         for box, (color, status, bin_index, serial) in zip(self.boxes, state, strict=True):
             box.status, box.serial = statuses[status], int(serial)
             box.bin = BIN_COLORS[bin_index] if bin_index >= 0 else None
@@ -135,8 +166,9 @@ class BoxPool:
     def spawn_point_clear(self) -> bool:
         """No box in play within 1.5 box sizes of the spawn point along the belt."""
         L = self.layout
+        size = max(L.box_size, self.style.width if self.style is not None else 0.0)
         for box in self.in_play():
             x, y, _ = self.pos(box)
-            if abs(x - L.spawn_x) < 1.5 * L.box_size and abs(y - L.belt_y) < L.belt_width:
+            if abs(x - L.spawn_x) < 1.5 * size and abs(y - L.belt_y) < L.belt_width:
                 return False
         return True

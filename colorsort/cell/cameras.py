@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 import xml.etree.ElementTree as ET
 from collections.abc import Callable
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -77,11 +78,13 @@ class CameraRenderer:
     Attributes:
         seconds: [s] wall time spent rendering, for benchmarks.
         snapshot: the snapshot camera's latch (``snapshot.py``).
+        effect: what a held-out shift does to every rendered colour image, ``effect(camera, image)``, or None.
     """
 
     def __init__(self) -> None:
         self.seconds = 0.0
         self.snapshot = Snapshot()
+        self.effect: Callable[[str, np.ndarray], Any] | None = None
 
     def observe_ray(self, sim, box_detected: bool) -> None:
         """One observation of the ray, before the cameras': on a box's arrival the snapshot camera
@@ -111,8 +114,11 @@ class CameraRenderer:
         self.seconds += time.perf_counter() - start
         if depth:
             rgb, d = img
-            return np.ascontiguousarray(rgb[::-1]), np.ascontiguousarray(d[::-1, :, None])
-        return np.ascontiguousarray(img[::-1])
+            return self._effect(camera, np.ascontiguousarray(rgb[::-1])), np.ascontiguousarray(d[::-1, :, None])
+        return self._effect(camera, np.ascontiguousarray(img[::-1]))
+
+    def _effect(self, camera: str, image: np.ndarray) -> np.ndarray:
+        return image if self.effect is None else self.effect(camera, image)
 
 
 def camera_sensors(render: Callable, mjcf: str, width: int, height: int, depth: bool, modality: str = "image"):

@@ -7,13 +7,14 @@ never travels but every contact sees it moving: boxes resting on it are carried 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from colorsort.cell.boxes import Box, BoxPool
-from colorsort.config import CellLayout, TaskConfig
+from colorsort.config import BoxStyle, CellLayout, TaskConfig
 
 
 class Belt:
@@ -71,6 +72,17 @@ class Belt:
 
 
 @dataclass(frozen=True)
+class Spawn:
+    """What the spawner drew for a new box: colour, offset from the centre line [m], yaw [rad], style (None: the
+    pool's). A held-out shift (``colorsort.shifts``) may change it before the box is set down."""
+
+    color: str
+    offset: float
+    yaw: float
+    style: BoxStyle | None = None
+
+
+@dataclass(frozen=True)
 class Placement:
     """Where a box was set down on the belt."""
 
@@ -91,10 +103,13 @@ class Spawner:
         next_serial: the serial the next box gets.
         placed: every box set down since the reset, in order (like the referee's events, a record of the
             episode, not part of the sim state).
+        edit: what a held-out shift makes of each draw, or None (``colorsort.shifts``); it draws from its own
+            generator, so the env's generator gives the same box stream with or without it.
     """
 
     def __init__(self, pool: BoxPool, config: TaskConfig):
         self.pool, self.config = pool, config
+        self.edit: Callable[[Spawn], Spawn] | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -108,9 +123,9 @@ class Spawner:
     def set_state(self, next_time: float, next_serial: int) -> None:
         self.next_time, self.next_serial = next_time, next_serial
 
-    def put(self, box: Box, color: str, x: float, y: float, yaw: float) -> None:
+    def put(self, box: Box, color: str, x: float, y: float, yaw: float, style: BoxStyle | None = None) -> None:
         """Set ``box`` down on the belt at (x, y) [m], turned ``yaw`` [rad], with the next serial."""
-        self.pool.place(box, color, x, y, yaw, self.next_serial)
+        self.pool.place(box, color, x, y, yaw, self.next_serial, style)
         offset = float(y - self.pool.layout.belt_y)
         self.placed.append(Placement(self.next_serial, color, offset, float(np.rad2deg(yaw))))
         self.next_serial += 1
@@ -127,6 +142,10 @@ class Spawner:
         color = str(rng.choice(cfg.box_colors))
         dy = rng.uniform(-cfg.lateral_jitter, cfg.lateral_jitter)
         yaw = np.deg2rad(rng.uniform(-cfg.yaw_jitter, cfg.yaw_jitter))
-        self.put(box, color, L.spawn_x, L.belt_y + dy, yaw)
+        if self.edit is None:
+            self.put(box, color, L.spawn_x, L.belt_y + dy, yaw)
+        else:
+            s = self.edit(Spawn(color, float(dy), float(yaw)))
+            self.put(box, s.color, L.spawn_x, L.belt_y + s.offset, s.yaw, s.style)
         self.next_time = now + cfg.spawn_period
         return box

@@ -5,14 +5,13 @@ determinism, configuration) is written once, in ``docs/task.md``. ``get_sim_stat
 everything that makes an instant replayable as one float64 vector (layout: ``sim_state.py``);
 ``set_sim_state`` restores it, after which stepping the same actions retraces the episode bit for bit.
 
-This class is robosuite glue: the model, the observables, the step, the reward, and what the cell
-does not own (the clock, the seeded generator, robosuite's controllers); the cell itself is
-``plant.py`` (pool, belt, spawner, seal, referee).
+This class is robosuite glue: the model, the observables, the step, the reward, and what the cell does not own
+(the clock, the seeded generator, robosuite's controllers, held-out shifts); the cell itself is ``plant.py``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import mujoco
@@ -36,6 +35,7 @@ from colorsort.config import CellLayout, Lighting, TaskConfig, layout_for, make_
 from colorsort.errors import ActionError, ConfigError
 from colorsort.paths import asset_path
 from colorsort.robots import GRIPPERS, ROBOTS, RobotSpec
+from colorsort.shifts.episode import CellShifts
 
 
 class ColorSort(ManipulationEnv):
@@ -55,6 +55,8 @@ class ColorSort(ManipulationEnv):
             ``object-state`` (what ``GymWrapper`` feeds a policy by default).
         reward_scale: multiplies every reward (None: unscaled), as in robosuite's tasks.
         reward_shaping: add the dense staged reward (``staged_rewards``) to the sparse one.
+        shift: held-out shifts of every episode (docs/shifts.md), ``NAME:LEVEL`` texts, e.g. ``"camera-pose:2"``;
+            ``env.shifts.record``: each episode's draws, for the evaluator (no policy reads it).
         **overrides: ``TaskConfig`` fields, e.g. ``belt_speed=0.1``.
         Other arguments are robosuite's.
     """
@@ -74,7 +76,7 @@ class ColorSort(ManipulationEnv):
         camera_heights: int | list[int] = 128, camera_widths: int | list[int] = 128,
         camera_depths: bool | list[bool] = False, camera_segmentations: Any = None, renderer: str = "mjviewer",
         renderer_config: dict | None = None, seed: int | None = None, reward_scale: float | None = 1.0,
-        reward_shaping: bool = False, **overrides: Any,
+        reward_shaping: bool = False, shift: str | Iterable[str] | None = None, **overrides: Any,
     ):
         robot_list = [robots] if isinstance(robots, str) else list(robots)
         if len(robot_list) != 1 or robot_list[0] not in ROBOTS:
@@ -112,6 +114,7 @@ class ColorSort(ManipulationEnv):
         self.reward_scale = reward_scale
         self.use_object_obs = bool(use_object_obs)
         self.reward_shaping = bool(reward_shaping)
+        self.shifts = CellShifts(shift)
 
         super().__init__(
             robots=robot_list, env_configuration=env_configuration, controller_configs=controller_configs,
@@ -280,6 +283,8 @@ class ColorSort(ManipulationEnv):
         super()._reset_internal()
         if self.has_offscreen_renderer:
             self._cameras.hide_rangefinder(self.sim)
+        if self.shifts:  # after robosuite placed the arm, before the first box: draws nothing from self.rng
+            self._cameras.effect = self.shifts.begin(self).image
         self.plant.reset(self.cur_time, self.rng)
         self._cameras.snapshot.clear()
         self._step_reward = 0.0
@@ -305,6 +310,7 @@ class ColorSort(ManipulationEnv):
                 names = self.action_names()
                 raise ActionError("Action elements must be finite; got "
                                  + ", ".join(f"{names[i]} (index {i}) = {action[i]}" for i in bad))
+            action = self.shifts.action(action)
             self._substep = 0
             self._arm_action = action[:-1]
             self.plant.belt.belt_pass = bool(action[-1] > 0.0)
@@ -314,14 +320,9 @@ class ColorSort(ManipulationEnv):
         self.plant.physics_step()
 
     def _update_observables(self, force: bool = False) -> None:
-        """Sample every observable once per policy step, at its very end (see ``_post_action``).
-
-        robosuite calls this after each physics step and samples at the start of each policy
-        period, from kinematics one physics step old. ColorSort samples once, after the step's
-        boxes were spawned or parked and the kinematics recomputed, so that an observation shows
-        exactly the state ``get_sim_state`` returns (and a replay of that state re-renders it).
-        Observable delays and corrupters are not used by the task.
-        """
+        """Sample every observable once per policy step, at its very end (``_post_action``), not as robosuite does
+        at the start of each period from kinematics a physics step old: an observation shows exactly the state
+        ``get_sim_state`` returns (and a replay re-renders it). The task uses no observable delays or corrupters."""
         self._obs_dt += self.model_timestep
         if force:
             self._sample_observables()

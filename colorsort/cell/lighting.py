@@ -30,6 +30,7 @@ class LightRig:
 
     def __init__(self, model: mujoco.MjModel):
         self.model = model
+        self.tint: np.ndarray = np.ones(3)  # the lamps' own colour under every ``Lighting`` (light-color shift)
         self._diffuse = model.light_diffuse.copy()
         self._ambient = model.light_ambient.copy()
         self._specular = model.light_specular.copy()
@@ -38,7 +39,7 @@ class LightRig:
 
     def apply(self, lighting: Lighting, model: mujoco.MjModel | None = None) -> None:
         """Set the lights to ``lighting``: those of this rig's model, or of ``model`` (a copy of it)."""
-        scale = lighting.brightness * np.asarray(lighting.tint)
+        scale = lighting.brightness * np.asarray(lighting.tint) * self.tint
         m = self.model if model is None else model
         m.light_diffuse[:] = self._diffuse * scale
         m.light_ambient[:] = self._ambient * scale

@@ -150,7 +150,8 @@ class Plant:
         out = np.zeros(len(COLORS) + 8, np.float32)
         if boxes:
             box = min(boxes, key=lambda b: b.serial)
-            out[list(COLORS).index(box.color)] = 1.0
+            if box.color in COLORS:  # a novel distractor (``config.NOVEL_COLORS``) has no class: no one-hot
+                out[list(COLORS).index(box.color)] = 1.0
             out[len(COLORS) : len(COLORS) + 7] = self.pool.pose(box)
             out[-1] = 1.0
         return out

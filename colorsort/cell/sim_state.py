@@ -8,7 +8,7 @@ segment               length               what
 ====================  ===================  ==========================================================
 ``mujoco``            ``mj_stateSize``     MuJoCo's state (``MJ_STATE_SPEC``): time, qpos, qvel,
                                            controls, active equalities, mocap, the solver's warm start
-``boxes``             4 x pool size        per pooled box: colour (index in ``config.COLORS``, -1 while
+``boxes``             4 x pool size        per pooled box: colour (index in ``config.ALL_COLORS``, -1 while
                                            parked), status (index in ``BoxStatus``), bin (index in
                                            ``BIN_COLORS`` or -1), serial
 ``held``              1                    the sealed box's pool index, or -1

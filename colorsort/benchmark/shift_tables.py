@@ -1,0 +1,122 @@
+"""Tables and the heatmap of held-out sweeps (``colorsort-eval --sweep --json``), for README and docs/shifts.md.
+
+A sweep's summary (``summary``) keeps what the tables need: policy, variant, seeds, the command that ran it, its
+wall time and machine, and one row per arm (``shift_sweep.sweep_rows``). Pages mark the generated parts with
+``<!-- shifts headline -->`` and ``<!-- shifts table -->``, each closed by ``<!-- end shifts -->``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+from colorsort.benchmark.metrics import EvalReport
+from colorsort.benchmark.shift_sweep import sweep_rows
+
+SUMMARY_KEYS = ("policy", "variant", "seeds", "command", "wall_s", "executor", "envs", "machine", "written", "rows")
+HEATMAP_LEVEL = 2
+
+
+def summary(sweep: dict) -> dict:
+    """What the tables keep of a ``--sweep --json`` file (its per-episode reports stay in outputs/), the rows
+    computed afresh from its reports."""
+    kept = {k: sweep[k] for k in SUMMARY_KEYS if k in sweep}
+    if "reports" in sweep:
+        kept["rows"] = sweep_rows([EvalReport(**r) for r in sweep["reports"]])
+    return kept
+
+
+def load(folder: Path) -> list[dict]:
+    """Every sweep summary in ``folder`` (``*.json``), by policy name."""
+    return sorted((json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))), key=lambda s: s["policy"])
+
+
+def policy_name(sweep: dict) -> str:
+    return Path(sweep["policy"]).name if sweep["policy"] not in ("expert", "random") else sweep["policy"]
+
+
+def at_level(sweep: dict, level: int) -> list[dict]:
+    return [r for r in sweep["rows"] if r["level"] == level]
+
+
+def headline(sweeps: list[dict]) -> str:
+    """One line per policy: control success, mean relative success at level 2, worst shift there."""
+    lines = ["| policy | variant | control | mean relative success at level 2 | worst shift at level 2 |",
+             "| --- | --- | --- | --- | --- |"]
+    for s in sweeps:
+        control = next(r for r in s["rows"] if r["shift"] == "none")
+        rows = [r for r in at_level(s, HEATMAP_LEVEL) if r["relative"] is not None]
+        first = (f"| `{policy_name(s)}` | `{s['variant']}` | {100 * control['success']:.0f}% "
+                 f"({control['episodes']} ep.) |")
+        if not rows:  # the control sorted nothing: no relative success
+            lines.append(f"{first} - | - |")
+            continue
+        worst = min(rows, key=lambda r: r["relative"])
+        mean = float(np.mean([r["relative"] for r in rows]))
+        lines.append(f"{first} {100 * mean:.0f}% over {len(rows)} shifts | `{worst['shift']}` "
+                     f"{100 * worst['relative']:.0f}% |")
+    return "\n".join(lines)
+
+
+def full_table(sweeps: list[dict]) -> str:
+    """Every arm of every sweep: success and relative success with their 95% intervals, how boxes were lost."""
+    lines = ["| policy | shift | level | episodes | success (95% CI) | relative to control (95% CI) | misplaced | "
+             "dropped | stalled |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for s in sweeps:
+        for r in s["rows"]:
+            lo, hi = r["success_ci95"]
+            rel = (f"{100 * r['relative']:.0f}% ({100 * r['relative_ci95'][0]:.0f}-{100 * r['relative_ci95'][1]:.0f}%)"
+                   if r["relative"] is not None else "-")
+            lines.append(f"| `{policy_name(s)}` | {'control' if r['shift'] == 'none' else r['shift']} | {r['level']} | "
+                         f"{r['episodes']} | {100 * r['success']:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%) | {rel} | "
+                         f"{r['misplaced']} | {r['dropped']} | {r['stalled']} |")
+    return "\n".join(lines)
+
+
+def provenance(sweeps: list[dict]) -> str:
+    """How each sweep was made: its command, wall time and machine."""
+    return "\n".join(f"- `{policy_name(s)}`: `{s.get('command', '?')}`, {s.get('wall_s', 0) / 60:.0f} min on "
+                     f"{s.get('machine', '?')} ({s.get('written', '?')})" for s in sweeps)
+
+
+def heatmap(sweeps: list[dict], path: Path, level: int = HEATMAP_LEVEL) -> None:
+    """Policies by shifts at ``level``: success relative to each policy's control, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    shifts = sorted({r["shift"] for s in sweeps for r in at_level(s, level)})
+    grid = np.full((len(sweeps), len(shifts)), np.nan)
+    for i, s in enumerate(sweeps):
+        for r in at_level(s, level):
+            if r["relative"] is not None:
+                grid[i, shifts.index(r["shift"])] = 100 * r["relative"]
+    fig, ax = plt.subplots(figsize=(1.0 + 0.55 * len(shifts), 1.2 + 0.45 * len(sweeps)))
+    im = ax.imshow(np.minimum(grid, 100), cmap="RdYlGn", vmin=0, vmax=100, aspect="auto")
+    ax.set_xticks(range(len(shifts)), shifts, rotation=60, ha="right", fontsize=8)
+    ax.set_yticks(range(len(sweeps)), [policy_name(s) for s in sweeps], fontsize=8)
+    for i in range(len(sweeps)):
+        for j in range(len(shifts)):
+            if not np.isnan(grid[i, j]):
+                ax.text(j, i, f"{grid[i, j]:.0f}", ha="center", va="center", fontsize=7)
+    ax.set_title(f"success at level {level} relative to the control [%]", fontsize=9)
+    fig.colorbar(im, ax=ax, fraction=0.03)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def fill(text: str, sweeps: list[dict]) -> str:
+    """``text`` with its marked headline and table regions rewritten from ``sweeps``."""
+    parts = {"headline": headline(sweeps), "table": full_table(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
+    for mark, body in parts.items():
+        pattern = re.compile(rf"(<!-- shifts {mark} -->\n).*?(<!-- end shifts -->)", flags=re.S)
+        found = pattern.search(text)
+        if found:
+            text = text[: found.start()] + f"{found.group(1)}{body}\n{found.group(2)}" + text[found.end():]
+    return text
