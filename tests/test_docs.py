@@ -37,7 +37,7 @@ def anchors(page: Path) -> set[str]:
 def test_readme_is_a_landing_page():
     lines = README.read_text().splitlines()
     assert len(lines) <= 200, f"README.md has {len(lines)} lines: move guides to docs/"
-    for page in ("task", "expert", "tracking", "data", "scaling", "benchmark", "baselines", "speed",
+    for page in ("task", "expert", "tracking", "data", "scaling", "benchmark", "shifts", "baselines", "speed",
                  "architecture", "stack"):
         assert f"(docs/{page}.md)" in README.read_text(), f"README's map of the docs misses docs/{page}.md"
 

@@ -372,6 +372,12 @@ def test_light_color_tints_the_lamps_off_the_lighting_variants_line_and_turns_th
         env.close()
 
 
+def test_the_pages_shift_tables_are_those_the_summaries_and_the_registry_give():
+    done = subprocess.run([sys.executable, str(ROOT / "tools" / "shift_tables.py"), "--check"], capture_output=True,
+                          text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
 def test_geom_type_constants_are_mujocos():
     assert (BOX, CYLINDER) == (int(mujoco.mjtGeom.mjGEOM_BOX), int(mujoco.mjtGeom.mjGEOM_CYLINDER))
 

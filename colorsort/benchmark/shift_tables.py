@@ -2,7 +2,8 @@
 
 A sweep's summary (``summary``) keeps what the tables need: policy, variant, seeds, the command that ran it, its
 wall time and machine, and one row per arm (``shift_sweep.sweep_rows``). Pages mark the generated parts with
-``<!-- shifts headline -->`` and ``<!-- shifts table -->``, each closed by ``<!-- end shifts -->``.
+``<!-- shifts list -->``, ``<!-- shifts headline -->`` and ``<!-- shifts table -->``, each closed by
+``<!-- end shifts -->``.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import numpy as np
 
 from colorsort.benchmark.metrics import EvalReport
 from colorsort.benchmark.shift_sweep import sweep_rows
+from colorsort.shifts import GROUPS, SHIFTS
 
 SUMMARY_KEYS = ("policy", "variant", "seeds", "command", "wall_s", "executor", "envs", "machine", "written", "rows")
 HEATMAP_LEVEL = 2
@@ -89,13 +91,14 @@ def heatmap(sweeps: list[dict], path: Path, level: int = HEATMAP_LEVEL) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shifts = sorted({r["shift"] for s in sweeps for r in at_level(s, level)})
+    found = {r["shift"] for s in sweeps for r in at_level(s, level)}
+    shifts = [n for g in GROUPS for n, shift in SHIFTS.items() if shift.group == g and n in found]  # by group
     grid = np.full((len(sweeps), len(shifts)), np.nan)
     for i, s in enumerate(sweeps):
         for r in at_level(s, level):
             if r["relative"] is not None:
                 grid[i, shifts.index(r["shift"])] = 100 * r["relative"]
-    fig, ax = plt.subplots(figsize=(1.0 + 0.55 * len(shifts), 1.2 + 0.45 * len(sweeps)))
+    fig, ax = plt.subplots(figsize=(2.0 + 0.55 * len(shifts), 2.6 + 0.4 * len(sweeps)))
     im = ax.imshow(np.minimum(grid, 100), cmap="RdYlGn", vmin=0, vmax=100, aspect="auto")
     ax.set_xticks(range(len(shifts)), shifts, rotation=60, ha="right", fontsize=8)
     ax.set_yticks(range(len(sweeps)), [policy_name(s) for s in sweeps], fontsize=8)
@@ -111,9 +114,20 @@ def heatmap(sweeps: list[dict], path: Path, level: int = HEATMAP_LEVEL) -> None:
     plt.close(fig)
 
 
+def shift_list() -> str:
+    """Every shift by group: what it changes and its levels 1-3 in units (from the registry)."""
+    lines = ["| group | shift | what changes | level 1 | level 2 | level 3 |", "| --- | --- | --- | --- | --- | --- |"]
+    for group in GROUPS:
+        for shift in (s for s in SHIFTS.values() if s.group == group):
+            levels = " | ".join(shift.level_text(lv) for lv in (1, 2, 3))
+            lines.append(f"| {group} | `{shift.name}` | {shift.summary} | {levels} |")
+    return "\n".join(lines)
+
+
 def fill(text: str, sweeps: list[dict]) -> str:
-    """``text`` with its marked headline and table regions rewritten from ``sweeps``."""
-    parts = {"headline": headline(sweeps), "table": full_table(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
+    """``text`` with its marked regions (the shift list, the headline, the table) rewritten."""
+    parts = {"list": shift_list(), "headline": headline(sweeps),
+             "table": full_table(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
     for mark, body in parts.items():
         pattern = re.compile(rf"(<!-- shifts {mark} -->\n).*?(<!-- end shifts -->)", flags=re.S)
         found = pattern.search(text)
