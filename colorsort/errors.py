@@ -8,6 +8,10 @@ place that maps them to exit codes, for every CLI (``colorsort.cli.run.guarded``
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
+import numpy as np
+
 
 class ColorSortError(Exception):
     """Base of every error ColorSort raises on purpose."""
@@ -19,6 +23,19 @@ class ConfigError(ColorSortError, ValueError):
 
 class ActionError(ColorSortError, ValueError):
     """An action the env cannot take: wrong shape or not finite."""
+
+
+def checked_action(action: object, dim: int, names: Callable[[], list[str]]) -> np.ndarray:
+    """``action`` as a float64 vector of ``dim`` finite elements; ``ActionError`` naming the bad ones otherwise
+    (``names()``: one name per element)."""
+    action = np.asarray(action, dtype=float)
+    if action.shape != (dim,):
+        raise ActionError(f"Expected an action of shape ({dim},), got {action.shape}")
+    bad = np.flatnonzero(~np.isfinite(action))
+    if bad.size:
+        raise ActionError("Action elements must be finite; got "
+                          + ", ".join(f"{names()[i]} (index {i}) = {action[i]}" for i in bad))
+    return action
 
 
 class DataConflictError(ColorSortError, ValueError):

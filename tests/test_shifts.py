@@ -3,6 +3,9 @@ says (measured in the sim), draws follow the episode's seed, the policy sees not
 and a sweep in small writes its table and heatmap."""
 
 import json
+import os
+import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -11,7 +14,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 import pytest
-from helpers import exit_status, new_env
+from helpers import console_script, exit_status, new_env
 
 from colorsort.benchmark.evaluate import run_evaluation
 from colorsort.benchmark.gym_env import ColorSortGymEnv
@@ -461,3 +464,85 @@ def test_a_sweep_in_small_writes_its_table_and_heatmap(tmp_path, capsys):
     table = (pages / "shifts.md").read_text()
     assert "| `expert` | `default` |" in table and "| `expert` | image-noise | 2 | 2 |" in table
     assert (pages / "shift_heatmap.png").read_bytes()[:4] == b"\x89PNG"
+
+
+# ------------------------------------------------------------------ docs/shifts.md's commands, as written
+PAGE = ROOT / "docs" / "shifts.md"
+
+
+def page_blocks(language: str = "") -> list[str]:
+    fences = re.findall(r"^```(\w*)\n(.*?)^```", PAGE.read_text(), flags=re.S | re.M)
+    return [body for lang, body in fences if lang == language]
+
+
+def page_commands(program: str) -> list[list[str]]:
+    """Every shell command of docs/shifts.md that runs ``program``, continuation lines joined, as argv."""
+    lines = [ln for block in page_blocks() for ln in block.replace("\\\n", " ").splitlines()]
+    return [shlex.split(ln) for ln in lines if re.search(rf"(^|\s){program}\s", ln + " ")]
+
+
+def with_flag(argv: list[str], flag: str, value: str) -> list[str]:
+    """``argv`` with ``flag`` (argparse's ``--flag value`` or LeRobot's ``--flag=value``) set to ``value``."""
+    if flag in argv:
+        k = argv.index(flag)
+        return argv[: k + 1] + [value] + argv[k + 2:]
+    return [f"{flag}={value}" if a.startswith(f"{flag}=") else a for a in argv]
+
+
+@pytest.fixture
+def workdir(tmp_path):
+    (tmp_path / "baselines").symlink_to(ROOT / "baselines")
+    return tmp_path
+
+
+@pytest.mark.slow
+def test_the_pages_colorsort_eval_commands_run_as_written(workdir):
+    """Each as written, its episodes cut to 1 of 10 steps (an arm of the sweep included)."""
+    commands = page_commands("colorsort-eval")
+    assert len(commands) == 4
+    for argv in commands:
+        if "--episodes" in argv:
+            argv = with_flag(argv, "--episodes", "1") + ["--episode-length", "10"]
+        if "--side-episodes" in argv:
+            argv = with_flag(argv, "--side-episodes", "1")
+        done = console_script(argv[0], argv[1:], workdir)
+        assert done.returncode == 0, (argv, done.stderr[-2000:])
+    assert json.loads((workdir / "outputs" / "shifted.json").read_text())["shift"] == "image-noise:1,robot-start:2"
+    sweep = json.loads((workdir / "outputs" / "sweep.json").read_text())
+    assert len(sweep["rows"]) == 1 + 3 * len(SHIFTS)
+
+
+@pytest.mark.slow
+def test_the_pages_lerobot_eval_command_runs_as_written(workdir):
+    """Two episodes of 30 steps, in a process of its own (LeRobot finds the env type by its plugin)."""
+    (argv,) = page_commands("lerobot-eval")
+    argv = with_flag(argv[argv.index("lerobot-eval"):], "--eval.n_episodes", "2") + ["--env.episode_length=30"]
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    done = subprocess.run([str(Path(sys.executable).parent / argv[0]), *argv[1:]], cwd=workdir, env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "'n_episodes': 2" in done.stderr + done.stdout
+
+
+@pytest.mark.slow
+def test_the_pages_python_block_runs(tmp_path):
+    (block,) = page_blocks("python")
+    check = "\nfor e in (env,):\n    e.reset()\n"
+    done = subprocess.run([sys.executable, "-c", block + check], cwd=tmp_path, capture_output=True, text=True,
+                          env={**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+
+
+@pytest.mark.slow
+def test_a_sweep_gives_the_same_episodes_whatever_the_workers_and_the_jobs_and_as_separate_runs():
+    from colorsort.benchmark.shift_sweep import run_sweep, sweep_arms
+
+    arms = sweep_arms(1, 1, (3,), ("camera-pose", "box-offset"))  # the control, box-offset:3, camera-pose:3
+    kwargs = dict(episode_length=180, progress=False)  # 9 s: the first box sorted
+    one = run_sweep("expert", "default", arms, executor=ExecutorConfig(workers=1), **kwargs)
+    two = run_sweep("expert", "default", arms, executor=ExecutorConfig(workers=2), shard_size=1, **kwargs)
+    assert [r.per_episode for r in one] == [r.per_episode for r in two]
+    assert [r.shift for r in one] == ["none", "box-offset:3", "camera-pose:3"]
+    assert one[1].per_episode[0]["boxes"] and one[1].per_episode[0]["boxes"][0]["offset"] in (-0.07, 0.07)
+    alone = run_evaluation("expert", ["default"], 1, shift=("camera-pose:3",), **kwargs)
+    assert alone.reports[0].per_episode == one[2].per_episode  # an arm after others in one env: as if alone

@@ -7,8 +7,10 @@ metrics are ``metrics.py``'s; the command line is ``colorsort-eval`` (``cli/eval
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from tqdm import tqdm
 
@@ -170,17 +172,30 @@ def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(
     Raises:
         RuntimeError: a job failed (its traceback), or the run was interrupted.
     """
-    tasks = [Task(f"{j.settings.variant}:{shift_label(parse_shifts(j.settings.shift))}:{j.seeds[0]}", run_job, j)
+    tasks = [(f"{j.settings.variant}:{shift_label(parse_shifts(j.settings.shift))}:{j.seeds[0]}", run_job, j)
              for j in jobs]
-    bar = tqdm(total=sum(len(j.seeds) for j in jobs), desc=desc, unit="episode", disable=not progress)
+    results = run_jobs(tasks, sum(len(j.seeds) for j in jobs), executor, progress, desc, with_attempts=True)
+    return [r.value for r in results], sum(r.attempts > 1 for r in results)
+
+
+def run_jobs(tasks: list[tuple[str, Callable, Any]], episodes: int, executor: ExecutorConfig, progress: bool,
+             desc: str, with_attempts: bool = False) -> list:
+    """Run ``(key, function, job)`` tasks on ``executor`` with a progress bar of ``episodes`` (each task sends one
+    message an episode); each task's value in order (its ``TaskResult`` with ``with_attempts``).
+
+    Raises:
+        RuntimeError: a task failed (its traceback), or the run was interrupted.
+    """
+    bar = tqdm(total=episodes, desc=desc, unit="episode", disable=not progress)
     try:
-        results = make_executor(executor, PRELOAD, forwarded_env()).run(tasks, lambda _: bar.update())
+        results = make_executor(executor, PRELOAD, forwarded_env()).run([Task(*t) for t in tasks],
+                                                                         lambda _: bar.update())
     finally:
         bar.close()
     failed = [r for r in results if not r.ok]
     if failed:
         raise StageError("evaluation stopped: " + "; ".join(r.error or f"{r.key} was stopped" for r in failed))
-    return [r.value for r in results], sum(r.attempts > 1 for r in results)
+    return results if with_attempts else [r.value for r in results]
 
 
 @dataclass(frozen=True)

@@ -116,6 +116,12 @@ class ColorSortGymEnv(gym.Env):
                                   control_freq=self.fps, ignore_done=True, shift=self.shift)
         return self._env
 
+    def set_shift(self, shift: str | Iterable[str] | None) -> None:
+        """Held-out shifts from the next reset on (as the constructor's ``shift``): a sweep's arms in one env."""
+        self.shift = tuple(str(s) for s in parse_shifts(shift))
+        if self._env is not None:
+            self._env.set_shift(self.shift)
+
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)

@@ -1,9 +1,11 @@
 """A policy's whole held-out sweep: the control arm and every shift at every level, on the same seeds.
 
-Every arm runs on ``SHIFT_SEEDS`` (episode k on the k-th), so arm and control differ only by the shift; one
-``run_episodes`` call spreads every arm's jobs over the executor. Relative success (shifted / control) has a
-conservative 95% interval: the arm's Wilson bounds over the control's (low / high, high / low), which stays
-honest where both rates sit at 100% (a ratio's usual log interval collapses to a point there).
+Every arm runs on ``SHIFT_SEEDS`` (episode k on the k-th), so arm and control differ only by the shift. The arms'
+episodes are dealt into one job per worker; a job builds one env and one policy and switches the env's shifts
+between arms (``ColorSortGymEnv.set_shift``), so a sweep of 49 arms builds two envs on two workers, not 49.
+Relative success (shifted / control) has a conservative 95% interval: the arm's Wilson bounds over the control's
+(low / high, high / low), which stays honest where both rates sit at 100% (a ratio's usual log interval collapses
+to a point there).
 """
 
 from __future__ import annotations
@@ -11,12 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from colorsort.benchmark.evaluate import EvalJob, EvalSettings, run_episodes
+from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, run_jobs
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.errors import ConfigError
-from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig, chunks
+from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig, TaskContext, chunks
 from colorsort.shifts import LEVELS, SHIFTS, parse_shifts, shift_label
 from colorsort.variants import SHIFT_SEEDS, get_variant
 
@@ -56,23 +58,51 @@ def sweep_arms(episodes: int, side_episodes: int, levels: tuple[int, ...] = (1, 
                                        for n in names for lv in levels]
 
 
+@dataclass(frozen=True)
+class SweepJob:
+    """Episodes of several arms, by (arm index, shift, seed): one task of the executor, one env and one policy."""
+
+    settings: EvalSettings  # without a shift: the job sets each arm's
+    episodes: tuple[tuple[int, tuple[str, ...], int], ...]
+
+    @property
+    def key(self) -> str:
+        return f"{self.settings.variant}:sweep:{self.episodes[0][0]}:{self.episodes[0][2]}"
+
+
+def run_sweep_job(job: SweepJob, ctx: TaskContext) -> list[tuple[int, dict]]:
+    """The task: one env and one policy, the job's episodes in order, the env's shifts switched between arms."""
+    runner = EpisodeRunner(job.settings)
+    results = []
+    try:
+        for arm, shift, seed in job.episodes:
+            if shift != runner.env.shift:
+                runner.env.set_shift(shift)
+            results.append((arm, runner.episode(seed)))
+            ctx.send(job.settings.variant)
+    finally:
+        runner.close()
+    return results
+
+
 def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE,
               cameras: tuple[str, ...] = DEFAULT_CAMERAS, episode_length: int | None = None,
               executor: ExecutorConfig = ExecutorConfig(), shard_size: int = DEFAULT_SHARD_SIZE,
               progress: bool = True) -> list[EvalReport]:
-    """Every arm's report, in order (the control's ``shift`` is ``none``)."""
+    """Every arm's report, in order (the control's ``shift`` is ``none``); the same whatever the executor, its
+    workers and ``shard_size`` (episodes a job, at most)."""
     check_policy_spec(policy)
     get_variant(variant)
     path = policy if policy in ("expert", "random") else str(Path(policy).resolve())
-    jobs, owner = [], []
-    for k, arm in enumerate(arms):
-        shift = () if arm.shift == CONTROL else (arm.shift,)
-        settings = EvalSettings(path, variant, image_size, tuple(cameras), episode_length, False, shift)
-        for block in chunks(list(SHIFT_SEEDS[: arm.episodes]), shard_size, executor.workers):
-            jobs.append(EvalJob(settings, tuple(block)))
-            owner.append(k)
-    results, _ = run_episodes(jobs, executor, progress, desc=f"{policy} on {variant}: {len(arms)} arms")
-    per = [[r for o, rs in zip(owner, results, strict=True) if o == k for r in rs] for k in range(len(arms))]
+    settings = EvalSettings(path, variant, image_size, tuple(cameras), episode_length)
+    episodes = [(k, () if arm.shift == CONTROL else (arm.shift,), seed)
+                for k, arm in enumerate(arms) for seed in SHIFT_SEEDS[: arm.episodes]]
+    jobs = [SweepJob(settings, tuple(block)) for block in chunks(episodes, shard_size, executor.workers)]
+    results = run_jobs([(job.key, run_sweep_job, job) for job in jobs], len(episodes), executor, progress,
+                       desc=f"{policy} on {variant}: {len(arms)} arms")
+    per: list[list[dict]] = [[] for _ in arms]
+    for arm, result in (pair for job_results in results for pair in job_results):
+        per[arm].append(result)
     return [aggregate(policy, variant, rs, shift_label(parse_shifts(() if a.shift == CONTROL else (a.shift,))))
             for a, rs in zip(arms, per, strict=True)]
 

@@ -32,7 +32,7 @@ from colorsort.cell.rendering import check_gl
 from colorsort.cell.sim_state import CellState, SimStateLayout, rng_from_words, rng_to_words
 from colorsort.cell.suction import add_welds
 from colorsort.config import CellLayout, Lighting, TaskConfig, layout_for, make_config
-from colorsort.errors import ActionError, ConfigError
+from colorsort.errors import ConfigError, checked_action
 from colorsort.paths import asset_path
 from colorsort.robots import GRIPPERS, ROBOTS, RobotSpec
 from colorsort.shifts.episode import CellShifts
@@ -279,6 +279,11 @@ class ColorSort(ManipulationEnv):
                 obs = self.observe()  # re-render under the new lights
         return obs
 
+    def set_shift(self, shift: str | Iterable[str] | None) -> None:
+        """Held-out shifts from the next reset on (``shift`` as the constructor's); the cell is put back as built."""
+        self.shifts.undo(self)
+        self.shifts, self._cameras.effect = CellShifts(shift), None
+
     def _reset_internal(self) -> None:
         super()._reset_internal()
         if self.has_offscreen_renderer:
@@ -302,15 +307,7 @@ class ColorSort(ManipulationEnv):
 
     def _pre_action(self, action, policy_step=False):
         if policy_step:
-            action = np.asarray(action, dtype=float)
-            if action.shape != (self.action_dim,):
-                raise ActionError(f"Expected an action of shape ({self.action_dim},), got {action.shape}")
-            bad = np.flatnonzero(~np.isfinite(action))
-            if bad.size:
-                names = self.action_names()
-                raise ActionError("Action elements must be finite; got "
-                                 + ", ".join(f"{names[i]} (index {i}) = {action[i]}" for i in bad))
-            action = self.shifts.action(action)
+            action = self.shifts.action(checked_action(action, self.action_dim, self.action_names))
             self._substep = 0
             self._arm_action = action[:-1]
             self.plant.belt.belt_pass = bool(action[-1] > 0.0)

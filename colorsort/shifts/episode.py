@@ -88,6 +88,12 @@ class CellShifts:
         self.episode = EpisodeShift(env, self._built, self.shifts, shift_seed(env.rng))
         return self.episode
 
+    def undo(self, env: Cell) -> None:
+        """Put the cell back as built (before its shifts change)."""
+        if self.episode is not None and self._built is not None:
+            restore_cell(env, self._built)
+        self.episode = None
+
     def action(self, action: np.ndarray) -> np.ndarray:
         return action if self.episode is None else self.episode.action(action)
 
