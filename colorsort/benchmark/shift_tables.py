@@ -124,9 +124,31 @@ def shift_list() -> str:
     return "\n".join(lines)
 
 
+def shade_table() -> str:
+    """box-shade's shades: per class, direction and level, the delta E reached, the hue turned (what the expert's
+    colour classes read) and the nearest other colour the cell knows, with its distance."""
+    from colorsort.config import ALL_COLORS, BIN_COLORS, COLORS
+    from colorsort.expert.perception import hue_of
+    from colorsort.shifts.box_shade import TOWARD, shade
+    from colorsort.shifts.colour import delta_e
+
+    names = {"red": ("orange", "crimson"), "green": ("teal", "lime"), "blue": ("slate", "navy")}
+    lines = ["| class | toward | level | delta E from the class | hue turned [deg] | nearest other colour (delta E) |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for color in BIN_COLORS:
+        for which in range(len(TOWARD[color])):
+            for level in (1, 2, 3):
+                rgba = shade(color, SHIFTS["box-shade"].magnitude(level), which)
+                turn = (hue_of(rgba) - hue_of(COLORS[color]) + 180.0) % 360.0 - 180.0
+                other = min((c for c in ALL_COLORS if c != color), key=lambda c: delta_e(rgba, ALL_COLORS[c]))
+                lines.append(f"| {color} | {names[color][which]} | {level} | {delta_e(rgba, COLORS[color]):.1f} | "
+                             f"{turn:+.1f} | {other} ({delta_e(rgba, ALL_COLORS[other]):.1f}) |")
+    return "\n".join(lines)
+
+
 def fill(text: str, sweeps: list[dict]) -> str:
     """``text`` with its marked regions (the shift list, the headline, the table) rewritten."""
-    parts = {"list": shift_list(), "headline": headline(sweeps),
+    parts = {"list": shift_list(), "shades": shade_table(), "headline": headline(sweeps),
              "table": full_table(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
     for mark, body in parts.items():
         pattern = re.compile(rf"(<!-- shifts {mark} -->\n).*?(<!-- end shifts -->)", flags=re.S)
