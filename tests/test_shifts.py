@@ -443,6 +443,12 @@ def test_same_seeds_draw_the_same_shift_whatever_the_workers_and_the_json_record
     record = json.loads(out.read_text())
     assert record["shift"] == "image-noise:1,robot-start:2"
     assert record["per_episode"][0]["shift"]["robot-start"]["level"] == 2
+    report = tmp_path / "report"
+    assert exit_status(eval_main, ["--policy", "expert", "--variant", "default", "--episodes", "1",
+                                   "--episode-length", "5", "--shift", "robot-start:2", "--report", str(report),
+                                   "--videos", "0"]) == 0
+    page = (report / "index.html").read_text()
+    assert "default under robot-start:2" in page and "&quot;direction&quot;" in page
 
 
 @pytest.mark.slow

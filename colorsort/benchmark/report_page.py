@@ -113,12 +113,14 @@ def _episode(variant: str, boxes: int, e: dict[str, Any], filmed: bool) -> str:
     video = (f"<video controls muted preload='metadata' width='480' height='360' src='{film_name(variant, e['seed'])}'>"
              "</video>" if filmed else "<p class='meta'>not filmed</p>")
     state = "ok" if e["success"] else "failed"
+    drawn = (f"<p class='meta'>shift: <code>{html.escape(json.dumps(e['shift']))}</code></p>"
+             if e.get("shift") else "")  # each shift's level and the values drawn for this episode
     ended = e["ended"]
     if ended == "time limit":
         ended += f" ({len(e['boxes'])} of {boxes} boxes left play)"
     return (f"<div class='episode {state}' id='{variant}-seed{e['seed']}'><h3>seed {e['seed']}: "
             f"{html.escape(ended)}</h3><p class='meta'>{e['steps']} steps, {e['sim_time']:.1f} s "
-            f"of sim time</p><ol class='boxes'>{items or '<li>no box left play</li>'}</ol>{video}</div>")
+            f"of sim time</p>{drawn}<ol class='boxes'>{items or '<li>no box left play</li>'}</ol>{video}</div>")
 
 
 def write_report(out: str | Path, reports: list[EvalReport], films: dict[tuple[str, int], bytes],
@@ -137,7 +139,8 @@ def write_report(out: str | Path, reports: list[EvalReport], films: dict[tuple[s
         boxes = get_variant(r.variant).boxes
         episodes = "".join(_episode(r.variant, boxes, e, (r.variant, e["seed"]) in films)
                            for e in episodes_in_order(r))
-        sections.append(f"<section id='variant-{r.variant}'><h2>{r.variant}: {r.successes} of {r.episodes} "
+        shifted = f" under {html.escape(r.shift)}" if r.shift != "none" else ""
+        sections.append(f"<section id='variant-{r.variant}'><h2>{r.variant}{shifted}: {r.successes} of {r.episodes} "
                         f"episodes succeeded ({100 * r.success_rate:.0f}%, 95% interval {100 * lo:.0f}-"
                         f"{100 * hi:.0f}%)</h2>{episodes}</section>")
     policy = html.escape(reports[0].policy if reports else "-")
