@@ -110,6 +110,8 @@ class ScoreRow:
                                "seed": self.seed, "steps": self.steps, "passes": self.passes,
                                "train_minutes": self.train_minutes,
                                **{**asdict(self.report), "success_ci95": list(self.report.success_ci95)}}
+        if self.report.shift == "none":
+            del out["shift"]  # a baseline is scored as built: its rows name no held-out shift
         if self.checkpoint is not None:
             out.update(checkpoint=self.checkpoint, validation=[p.to_json() for p in self.validation])
         return out
