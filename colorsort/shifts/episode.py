@@ -3,9 +3,10 @@ each shift drawn and applied.
 
 ``ColorSort`` (``cell/env.py``) holds a ``CellShifts``, whose ``begin`` restores the cell and builds an
 ``EpisodeShift`` at every reset, after robosuite reset the arm and before the first box is spawned; the env then
-passes each new box (``edit_spawn``), each rendered image (``image``) and each action (``action``) through it. Every shift draws from its own generator, seeded
-from the episode's seed and the shift's name, so a shift draws the same values alone or with others, and the
-env's own generator (the box stream, the lights) draws exactly as without shifts.
+passes each new box (``edit_spawn``), each rendered image (``image``) and each action (``action``) through it.
+Every shift draws from its own generator, seeded from the episode's seed and the shift's name, so a shift draws the
+same values alone or with others, and the env's own generator (the box stream, the lights) draws exactly as
+without shifts.
 """
 
 from __future__ import annotations
