@@ -92,7 +92,7 @@ class Shift(ABC):
 
     def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
         """This episode's values at ``level`` (1-3), JSON-ready: what ``apply`` sets, recorded with the episode.
-        By default the level's magnitude alone (a shift with no direction and no choice)."""
+        By default nothing: a shift with no direction and no choice applies its level's magnitude."""
         return {}
 
     @abstractmethod

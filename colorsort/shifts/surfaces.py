@@ -12,8 +12,6 @@ import numpy as np
 from colorsort.shifts.base import rounded
 from colorsort.shifts.colour import delta_e, lab_to_srgb, srgb_to_lab
 
-TEXTURES: tuple[str, ...] = ("plain", "checker", "speckle")
-
 
 def drawn_colour(base: tuple[float, ...], distance: float, rng: np.random.Generator,
                  max_chroma: float = 25.0) -> dict:
