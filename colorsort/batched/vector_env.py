@@ -36,7 +36,7 @@ from colorsort.variants import Variant, get_variant
 
 def refuse_shifts(shift: str | Iterable[str] | None) -> None:
     """ValueError for any held-out shift above level 0: the batched cell applies none yet (``docs/shifts.md``)."""
-    active = [str(s) for s in parse_shifts(shift) if s.level > 0]
+    active = [str(s) for s in parse_shifts(shift) if s.active]
     if active:
         raise ConfigError(f"the batched cell (MuJoCo Warp) applies no held-out shift yet; asked: {', '.join(active)}. "
                           "Run shifts on the CPU cell: gym.make(id, shift=...), colorsort-eval --backend cpu")

@@ -81,6 +81,9 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
     parser.add_argument("--expert", default=None, metavar="NAME:VALUE,...",
                         help="the expert's settings changed from its belt's preset (colorsort.expert.config), e.g. "
                              "press:0.01,track_hold_time:0.15")
+    parser.add_argument("--shift", default=d.shift, metavar="NAME:train,...",
+                        help="record with shifts' training ranges drawn per episode (colorsort.shifts; all:train for "
+                             "every one that has a range); held-out levels 1-3 are refused")
     parser.add_argument("--resume", action="store_true", help="add the missing episodes to an existing dataset")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset")
     args = parser.parse_args(argv)
@@ -97,7 +100,7 @@ def parse_args(argv: list[str] | None) -> CollectConfig:
         cameras=parse_cameras(args.cameras),
         image_size=parse_image_size(args.image_size), fps=args.fps, workers=args.workers, vcodec=args.vcodec,
         executor=args.executor, shard_size=args.shard_size, retries=args.retries, address=args.address,
-        turn_to_box=not args.no_turn, expert=parse_changes(args.expert) if args.expert else (),
+        turn_to_box=not args.no_turn, expert=parse_changes(args.expert) if args.expert else (), shift=args.shift,
         resume=args.resume, overwrite=args.overwrite,
         perturbations=tuple(parse(name, getattr(args, name)) for name in PERTURBATIONS
                             if getattr(args, name) is not None))

@@ -190,7 +190,10 @@ def list_shifts() -> str:
         for shift in (s for s in SHIFTS.values() if s.group == group):
             lines.append(f"{group:<11} {shift.name:<18} {shift.summary}")
             lines += [f"{'':<11} {'':<18}   level {lv}: {shift.level_text(lv)}" for lv in LEVELS]
-    lines.append(f"{'':<11} {'all:L':<18} every shift above at level L at once")
+            train = ("drawn per episode between as built and level 1 (exclusive)" if shift.trainable
+                     else "none: held out wholly")
+            lines.append(f"{'':<11} {'':<18}   train:   {train}")
+    lines.append(f"{'':<11} {'all:L':<18} every shift above at level L at once (all:train: every training range)")
     return "\n".join(lines)
 
 

@@ -11,6 +11,7 @@ from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.expert.config import ExpertConfig, recording_expert
 from colorsort.robots import get_robot
+from colorsort.shifts.registry import parse_shifts, shift_label, training_shifts
 from colorsort.variants import get_variant
 
 FPS_CHOICES = (10, 20, 25, 50)  # control rates whose period is a whole number of 10 ms servo periods
@@ -49,6 +50,9 @@ class CollectConfig:
     turn_to_box: bool = True  # the expert turns the cup to a turned box; False: it keeps its home yaw (ExpertConfig)
     # the expert's settings changed from its belt's preset, (name, value) pairs (expert.config.CHANGEABLE)
     expert: tuple[tuple[str, float], ...] = ()
+    # shifts' training ranges the episodes are recorded with (colorsort.shifts): "NAME:train,..." or "all:train";
+    # a held-out level (1-3) is refused
+    shift: str = ""
     resume: bool = False  # add the episodes still missing to an existing dataset
     overwrite: bool = False  # replace an existing dataset
 
@@ -81,6 +85,7 @@ class CollectConfig:
         if self.seed < 0:
             raise ConfigError(f"seed={self.seed} must be >= 0")
         self.expert_config  # noqa: B018 - validates the expert's changes
+        training_shifts(self.shift, "shift")
         if self.resume and self.overwrite:
             raise ConfigError("Pass --resume or --overwrite, not both")
 
@@ -93,6 +98,8 @@ class CollectConfig:
             settings["turn_to_box"] = False
         if self.expert:  # the same: recorded only when set
             settings["expert"] = [list(pair) for pair in self.expert]
+        if self.shift:  # the same
+            settings["shift"] = shift_label(parse_shifts(self.shift))
         settings.update({p.name: p.settings() for p in self.perturbations})
         return settings
 

@@ -66,7 +66,8 @@ def make_recording_env(config: CollectConfig) -> ColorSort:
     h, w = config.image_size
     return ColorSort(robots=config.robot, config=config.task_config, use_camera_obs=bool(config.cameras),
                      camera_names=list(config.cameras) or "scene",
-                     camera_heights=h, camera_widths=w, control_freq=config.fps, ignore_done=True, seed=config.seed)
+                     camera_heights=h, camera_widths=w, control_freq=config.fps, ignore_done=True, seed=config.seed,
+                     shift=config.shift or None)
 
 
 def expert_step(expert: Expert, obs: dict) -> Step:

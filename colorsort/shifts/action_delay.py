@@ -21,8 +21,9 @@ class ActionDelay(Shift):
     summary = "every action applied this many control steps after the policy gave it"
     unit = "{} control steps late ({} ms at 20 Hz)"
     magnitudes = ((1, 50), (2, 100), (3, 150))
+    trainable = False  # whole control steps: nothing lies between 0 and 1
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         env = episode.env
         q = env.mj_data.qpos[env.robots[0]._ref_joint_pos_indexes]
         hold = np.concatenate([q, [-1.0, -1.0]])

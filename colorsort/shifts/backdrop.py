@@ -25,12 +25,12 @@ class Backdrop(Shift):
     unit = "delta E {} from the colours as built, floor {}"
     magnitudes = ((15.0, "plain"), (30.0, "checker"), (45.0, "speckle"))
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         distance, texture = self.magnitude(level)
         return {"floor": {**drawn_colour(FLOOR_AS_BUILT, distance, rng), "texture": texture},
                 "frame": drawn_colour(FRAME_AS_BUILT, distance, rng)}
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         m = episode.model
         floor = drawn["floor"]
         dress(m, m.geom("floor").id, "floor", floor["texture"], floor["rgb"])

@@ -21,10 +21,10 @@ class BeltLook(Shift):
     unit = "delta E {} from the belt as built, {}"
     magnitudes = ((12.0, "plain"), (24.0, "checker"), (36.0, "speckle"))
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         distance, texture = self.magnitude(level)
         return {**drawn_colour(BELT_AS_BUILT, distance, rng), "texture": texture}
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         m = episode.model
         dress(m, m.geom("belt_surface").id, "belt", drawn["texture"], drawn["rgb"])

@@ -17,8 +17,9 @@ class BoxMass(Shift):
     summary = "every box heavier (inertia scaled with it) and box-belt sliding friction lower (both geoms set)"
     unit = "{} kg, friction {} (cell: 0.5 kg, 1.0)"
     magnitudes = ((1.0, 0.8), (1.5, 0.6), (2.5, 0.4))
+    as_built = (0.5, 1.0)  # TaskConfig.box_mass, the arena's box and belt friction
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         mass, friction = self.magnitude(level)
         m, pool = episode.model, episode.env.plant.pool
         for body, geom in zip(pool.body, pool.geom, strict=True):

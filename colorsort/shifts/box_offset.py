@@ -37,7 +37,7 @@ class BoxOffset(Shift):
     unit = "{} cm off the centre line"
     magnitudes = (5.5, 6.25, 7.0)
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         layout = episode.env.layout
         offset = self.magnitude(level) / 100
         half_room = layout.belt_width / 2 + 0.002 - CLEARANCE  # the rails' inner faces stand 2 mm off the belt

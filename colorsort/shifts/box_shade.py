@@ -34,10 +34,10 @@ class BoxShade(Shift):
     unit = "delta E {} (CIELAB, CIE76)"
     magnitudes = (8.0, 16.0, 24.0)
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         return {"toward": {c: int(rng.integers(2)) for c in BIN_COLORS}}
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         palette = episode.env.plant.pool.palette
         for color, which in drawn["toward"].items():
             palette[color] = shade(color, self.magnitude(level), which)

@@ -18,7 +18,8 @@ class BoxShape(Shift):
     summary = "every box an upright cylinder with a flat top: a can at level 1, pucks at 2 and 3 (the ray sees 5 cm up)"
     unit = "cylinder {} cm across, {} cm tall"
     magnitudes = ((10.0, 10.0), (11.0, 7.0), (12.0, 6.0))
+    trainable = False  # wholly unseen by every recipe
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         diameter, height = self.magnitude(level)
         episode.env.plant.pool.style = BoxStyle("cylinder", diameter / 100, height / 100)

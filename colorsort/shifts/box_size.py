@@ -22,11 +22,11 @@ class BoxSize(Shift):
     unit = "edge 10 cm -/+ {} cm"
     magnitudes = (1.0, 2.0, 3.0)
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         edge = 10.0 + float(rng.choice([-1.0, 1.0])) * self.magnitude(level)
         return {"edge_cm": edge}
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         pool = episode.env.plant.pool
         scale = drawn["edge_cm"] / 100 / pool.layout.box_size
         base = pool.style or BoxStyle("box", pool.layout.box_size, pool.layout.box_size)

@@ -22,11 +22,11 @@ class CameraPose(Shift):
     unit = "{} cm moved, {} deg turned"
     magnitudes = ((0.5, 1.0), (1.0, 2.5), (2.0, 5.0))
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         return {camera: {"move": rounded(unit_vector(rng)), "axis": rounded(unit_vector(rng))}
                 for camera in ("scene", "sensor", "wrist")}
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         move_cm, turn_deg = self.magnitude(level)
         m = episode.model
         for cam in range(m.ncam):

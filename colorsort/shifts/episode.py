@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from colorsort.config import ALL_COLORS
-from colorsort.shifts.base import Cell
+from colorsort.shifts.base import TRAIN, Cell
 from colorsort.shifts.registry import SHIFTS, ShiftLevel, parse_shifts
 
 if TYPE_CHECKING:
@@ -74,7 +74,7 @@ class CellShifts:
     """
 
     def __init__(self, shift: str | Iterable[str] | None):
-        self.shifts: tuple[ShiftLevel, ...] = tuple(s for s in parse_shifts(shift) if s.level > 0)
+        self.shifts: tuple[ShiftLevel, ...] = tuple(s for s in parse_shifts(shift) if s.active)
         self.episode: EpisodeShift | None = None
         self._built: AsBuilt | None = None
 
@@ -127,12 +127,14 @@ class EpisodeShift:
         self._actions: list[Callable[[np.ndarray], np.ndarray]] = []
         self._spawns: list[Callable[[Spawn], Spawn]] = []
         for s in shifts:
-            if s.level == 0:
+            if not s.active:
                 continue
             shift, rng = SHIFTS[s.name], self.generator(s.name)
-            drawn = shift.draw(s.level, rng)
-            self.drawn[s.name] = {"level": s.level, **drawn}
-            shift.apply(self, s.level, drawn, rng)
+            level = float(rng.uniform()) if s.level == TRAIN else int(s.level)  # training: a fraction of level 1
+            drawn = shift.draw(level, rng)
+            self.drawn[s.name] = {"level": s.level, **({"fraction": round(level, 4)} if s.level == TRAIN else {}),
+                                  **drawn}
+            shift.apply(self, level, drawn, rng)
         if self._spawns:
             env.plant.spawner.edit = self.edit_spawn
 

@@ -30,11 +30,12 @@ class ImageBlur(Shift):
     summary = "defocus (Gaussian, sigma) or motion blur (a line 4 sigma long, angle drawn) on every camera"
     unit = "sigma {} % of the image width"
     magnitudes = (0.5, 1.0, 2.0)
+    trainable = False  # at 32-64 px the motion kernel below level 1 is level 1's (2 px)
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         return {"kind": str(rng.choice(["defocus", "motion"])), "angle_deg": round(float(rng.uniform(0, 180)), 1)}
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         fraction = self.magnitude(level) / 100
 
         def blur(camera: str, image: np.ndarray) -> np.ndarray:

@@ -18,7 +18,7 @@ class ImageNoise(Shift):
     unit = "sigma {} grey levels (of 255)"
     magnitudes = (10.0, 25.0, 50.0)
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         sigma = self.magnitude(level)
         streams: dict[tuple[str, tuple[int, ...]], np.random.Generator] = {}
 

@@ -18,7 +18,7 @@ class JointNoise(Shift):
     unit = "sigma {} rad per joint target"
     magnitudes = (0.005, 0.01, 0.02)
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         sigma, joints = self.magnitude(level), len(episode.env.robots[0].robot_joints)
 
         def noise(action: np.ndarray) -> np.ndarray:

@@ -26,12 +26,12 @@ class LightColor(Shift):
     unit = "tint strength {}, turned {} deg"
     magnitudes = ((0.15, 15.0), (0.30, 30.0), (0.45, 45.0))
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         hue = str(rng.choice(["green", "magenta"]))
         return {"hue": hue, "tint": rounded(tint(self.magnitude(level)[0], hue), 3),
                 "tilt_azimuth_deg": round(float(rng.uniform(0, 360)), 1)}
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         tilt = self.magnitude(level)[1]
         lights = episode.env.plant.lights
         lights.tint = np.asarray(drawn["tint"], float)

@@ -22,8 +22,9 @@ class NovelDistractors(Shift):
     summary = f"a share of the boxes replaced by objects of no class ({', '.join(NOVEL_COLORS)}; cube or puck)"
     unit = "{} of the boxes"
     magnitudes = (0.25, 0.33, 0.5)
+    trainable = False  # wholly unseen by every recipe
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         share = self.magnitude(level)
         colors, shapes = list(NOVEL_COLORS), list(SHAPES)
 

@@ -1,4 +1,5 @@
-"""The registry of held-out shifts, and ``NAME:LEVEL`` as the command line gives it."""
+"""The registry of held-out shifts, and ``NAME:LEVEL`` as the command line gives it (``LEVEL`` 0-3, or ``train``
+for a trainable shift's training range)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from colorsort.errors import ConfigError
-from colorsort.shifts.base import LEVELS, Shift
+from colorsort.shifts.base import LEVELS, TRAIN, Shift
 
 SHIFTS: dict[str, Shift] = {}
 ALL = "all"  # ``all:L``: every shift at level L at once
@@ -22,26 +23,47 @@ def register[T: type[Shift]](cls: T) -> T:
 
 @dataclass(frozen=True)
 class ShiftLevel:
-    """One shift at one level."""
+    """One shift at one level: 0-3, or ``TRAIN`` (a value in its training range, drawn per episode)."""
 
     name: str
-    level: int
+    level: int | str
+
+    @property
+    def active(self) -> bool:
+        """Whether it changes anything (level 0 does not)."""
+        return self.level != 0
+
+    @property
+    def held_out(self) -> bool:
+        """Whether it sets a held-out level (1-3), which no recipe may train on."""
+        return self.level != 0 and self.level != TRAIN
 
     def __str__(self) -> str:
         return f"{self.name}:{self.level}"
 
 
+def trainable() -> list[str]:
+    """The shifts with a training range, in the registry's order."""
+    return [n for n, s in SHIFTS.items() if s.trainable]
+
+
 def parse_one(text: str) -> list[ShiftLevel]:
-    """``NAME:LEVEL`` (``all:L`` for every shift): one or, for ``all``, every shift at that level."""
+    """``NAME:LEVEL`` (``all:L`` for every shift, ``all:train`` for every trainable one): one shift or several."""
     name, sep, level_text = text.strip().partition(":")
-    valid = [*SHIFTS, ALL]
+    valid, level_text = [*SHIFTS, ALL], level_text.strip()
     if not sep or not name:
         raise ConfigError(f"shift {text!r}: give NAME:LEVEL, e.g. camera-pose:2; names: {valid}; "
-                          f"levels: {list(LEVELS)}")
+                          f"levels: {[*LEVELS, TRAIN]}")
     if name not in valid:
         raise ConfigError(f"Unknown shift {name!r}. Valid shifts: {valid}")
-    if level_text.strip() not in {str(v) for v in LEVELS}:
-        raise ConfigError(f"shift {name!r}: level {level_text!r} is not one of {list(LEVELS)}")
+    if level_text == TRAIN:
+        if name == ALL:
+            return [ShiftLevel(n, TRAIN) for n in trainable()]
+        if not SHIFTS[name].trainable:
+            raise ConfigError(f"shift {name!r} has no training range; shifts that have one: {trainable()}")
+        return [ShiftLevel(name, TRAIN)]
+    if level_text not in {str(v) for v in LEVELS}:
+        raise ConfigError(f"shift {name!r}: level {level_text!r} is not one of {[*LEVELS, TRAIN]}")
     level = int(level_text)
     return [ShiftLevel(n, level) for n in SHIFTS] if name == ALL else [ShiftLevel(name, level)]
 
@@ -52,13 +74,28 @@ def parse_shifts(given: str | Iterable[str] | None) -> tuple[ShiftLevel, ...]:
     if given is None:
         return ()
     texts: Sequence[str] = [t for t in given.split(",") if t.strip()] if isinstance(given, str) else list(given)
-    found: dict[str, int] = {}
+    found: dict[str, int | str] = {}
     for text in texts:
         for s in parse_one(text):
             if found.get(s.name, s.level) != s.level:
                 raise ConfigError(f"shift {s.name!r} given at levels {found[s.name]} and {s.level}: give one")
             found[s.name] = s.level
     return tuple(ShiftLevel(n, found[n]) for n in SHIFTS if n in found)
+
+
+def training_shifts(given: str | Iterable[str] | None, what: str) -> tuple[ShiftLevel, ...]:
+    """Shifts that data to train on may be recorded with: training ranges (``NAME:train``) and level 0 only. A
+    held-out level is refused, naming it and its values: no recipe randomises into what the shifts hold out."""
+    shifts = parse_shifts(given)
+    for s in shifts:
+        if s.held_out:
+            shift = SHIFTS[s.name]
+            raise ConfigError(f"{what}: {s} randomises into held-out level {s.level} of {s.name!r} "
+                              f"({shift.level_text(int(s.level))}): levels 1-3 are for evaluation only; train on "
+                              f"{s.name}:train (up to {shift.level_text(1)}, exclusive)" if shift.trainable else
+                              f"{what}: {s} is held out wholly: no recipe trains on {s.name!r}; shifts with a "
+                              f"training range: {trainable()}")
+    return shifts
 
 
 def shift_label(shifts: Iterable[ShiftLevel]) -> str:

@@ -18,10 +18,10 @@ class RobotStart(Shift):
     unit = "{} rad (norm over the arm's joints)"
     magnitudes = (0.1, 0.2, 0.4)
 
-    def draw(self, level: int, rng: np.random.Generator) -> dict[str, Any]:
+    def draw(self, level: float, rng: np.random.Generator) -> dict[str, Any]:
         return {"direction": rounded(unit_vector(rng, 6))}  # the IRB 140's six joints (a 7-joint arm: the first six)
 
-    def apply(self, episode: Episode, level: int, drawn: dict[str, Any], rng: np.random.Generator) -> None:
+    def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         env = episode.env
         robot = env.robots[0]
         joints, qpos = robot._ref_joint_indexes, robot._ref_joint_pos_indexes

@@ -38,6 +38,7 @@ from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
 from colorsort.expert.config import changed, expert_preset
+from colorsort.shifts.registry import training_shifts
 from colorsort.training.dagger_settings import DaggerSettings
 from colorsort.training.methods import method_name
 from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SNAPSHOT_DIFFUSION, TRACKING_ACT, PolicySettings
@@ -76,6 +77,8 @@ class DemoSettings:
         expert: the expert's settings changed from its belt's preset, (name, value) pairs of ``ExpertConfig``
             fields (``colorsort.expert.config.CHANGEABLE``), for the demos and DAgger's labels alike, e.g.
             press:0.01,track_hold_time:0.15.
+        shift: held-out shifts' training ranges every demo is recorded with, drawn per episode
+            (``colorsort.shifts``), e.g. all:train; a held-out level (1-3) is refused, naming it.
     """
 
     train_mix: tuple[tuple[str, float], ...] = (("default", 1.0), ("jitter", 1.0), ("fast", 1.0),
@@ -88,8 +91,10 @@ class DemoSettings:
     perturbations: tuple[Perturbation, ...] = ()
     turn_to_box: bool = True
     expert: tuple[tuple[str, float], ...] = ()
+    shift: str = ""
 
     def __post_init__(self) -> None:
+        training_shifts(self.shift, "demos.shift")  # ConfigError naming a held-out level
         for variant in self.train_variants:
             get_variant(variant)  # ConfigError naming the valid variants
         if not self.train_mix or any(w <= 0 for _, w in self.train_mix):
@@ -312,7 +317,8 @@ class Recipe:
     @property
     def label(self) -> str:
         method = method_name(self.policy.type, self.dagger.rounds, self.dagger.retrain, self.training.average)
-        return f"{method}, {'+'.join(self.demos.cameras) if self.demos.cameras else 'state'}"
+        randomised = ", randomised shifts" if self.demos.shift else ""
+        return f"{method}, {'+'.join(self.demos.cameras) if self.demos.cameras else 'state'}{randomised}"
 
     def override(self, changes: dict[str, Any]) -> Recipe:
         """This recipe with ``changes`` made, keyed ``section.field`` (``{"demos.counts": (8,)}``); a perturbation
@@ -337,6 +343,8 @@ class Recipe:
         perturbations by name."""
         demos = {f.name: getattr(self.demos, f.name) for f in fields(self.demos) if f.name != "perturbations"}
         demos["perturbations"] = {p.name: p.settings() for p in self.demos.perturbations}
+        if not self.demos.shift:  # a recipe without shifts reads as before they were a setting
+            del demos["shift"]
         sections = {"name": self.name, "demos": demos, "policy": asdict(self.policy),
                     "training": asdict(self.training), "evaluation": asdict(self.evaluation)}
         if self.dagger.rounds:  # a recipe without rounds reads as before DAgger was a setting
@@ -361,6 +369,12 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
     Recipe("camera-snapshot",
            DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot",), image_size=32,
                         perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75))),
+           replace(SMALL_ACT, optimizer_lr=3e-4, optimizer_lr_backbone=3e-4),
+           TrainSettings(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1),
+           EvalSettings(select_episodes=10)),
+    Recipe("camera-snapshot-dr",  # camera-snapshot's, recorded with every training range; 64 tried keep about 48
+           DemoSettings(train_mix=CAMERA_MIX, counts=(64,), cameras=("snapshot",), image_size=32,
+                        perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75)), shift="all:train"),
            replace(SMALL_ACT, optimizer_lr=3e-4, optimizer_lr_backbone=3e-4),
            TrainSettings(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1),
            EvalSettings(select_episodes=10)),

@@ -103,7 +103,8 @@ def collect_command(recipe: Recipe, variant: str, k: int, count: int, workers: i
              "--workers", str(workers), "--repo-id", REPO_ID]
             + [f"--{p.name.replace('_', '-')}={p.text}" for p in demos.perturbations_on(variant)]
             + ([] if demos.turn_to_box else ["--no-turn"])
-            + ([f"--expert={changes_text(demos.expert)}"] if demos.expert else []))
+            + ([f"--expert={changes_text(demos.expert)}"] if demos.expert else [])
+            + ([f"--shift={demos.shift}"] if demos.shift else []))
 
 
 def part_settings(command: list[str]) -> dict:
