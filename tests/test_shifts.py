@@ -71,8 +71,8 @@ def test_list_shifts_names_every_shift_and_its_levels(capsys):
 
 
 @pytest.mark.parametrize("given, named", [
-    ("camera:2", "Valid shifts"), ("camera-pose:4", "not one of [0, 1, 2, 3]"), ("camera-pose", "NAME:LEVEL"),
-    ("camera-pose:x", "not one of"), (":2", "NAME:LEVEL")])
+    ("camera:2", "Valid shifts"), ("camera-pose:4", "not one of [0, 1, 2, 3, 'train']"),
+    ("camera-pose", "NAME:LEVEL"), ("camera-pose:x", "not one of"), (":2", "NAME:LEVEL")])
 def test_a_bad_shift_exits_2_with_one_line_naming_the_valid_choices(capsys, given, named):
     assert exit_status(eval_main, ["--policy", "expert", "--shift", given]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -90,11 +90,10 @@ def training_shifts(given: str | Iterable[str] | None, what: str) -> tuple[Shift
     for s in shifts:
         if s.held_out:
             shift = SHIFTS[s.name]
+            hint = (f"train on {s.name}:train (up to {shift.level_text(1)}, exclusive)" if shift.trainable else
+                    f"{s.name!r} has no training range; shifts that have one: {trainable()}")
             raise ConfigError(f"{what}: {s} randomises into held-out level {s.level} of {s.name!r} "
-                              f"({shift.level_text(int(s.level))}): levels 1-3 are for evaluation only; train on "
-                              f"{s.name}:train (up to {shift.level_text(1)}, exclusive)" if shift.trainable else
-                              f"{what}: {s} is held out wholly: no recipe trains on {s.name!r}; shifts with a "
-                              f"training range: {trainable()}")
+                              f"({shift.level_text(int(s.level))}): levels 1-3 are for evaluation only; {hint}")
     return shifts
 
 

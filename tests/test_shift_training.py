@@ -1,0 +1,92 @@
+"""Shifts' training ranges (``NAME:train``): values strictly between the cell as built and level 1, drawn per
+episode from its seed; the recipe and the collector that record with them refuse every held-out level."""
+
+import numpy as np
+import pytest
+from helpers import exit_status, new_env
+
+from colorsort.cli.baseline import main as baseline_main
+from colorsort.cli.collect import main as collect_main
+from colorsort.cli.collect import parse_args as collect_args
+from colorsort.errors import ConfigError
+from colorsort.shifts import SHIFTS, parse_shifts
+from colorsort.shifts.base import between
+from colorsort.training.recipes import get_recipe
+from colorsort.training.stages import collect_command
+
+WHOLLY_HELD_OUT = {"box-shape", "novel-distractors"}  # the issue: no recipe ever sees them
+
+
+def numbers(magnitude) -> list[float]:
+    return [float(m) for m in (magnitude if isinstance(magnitude, tuple) else (magnitude,))
+            if not isinstance(m, str)]
+
+
+@pytest.mark.parametrize("name", [n for n, s in SHIFTS.items() if s.trainable])
+def test_a_training_range_lies_strictly_between_the_cell_and_level_1_apart_from_every_level(name):
+    shift = SHIFTS[name]
+    start = numbers(between(shift.as_built, shift.magnitudes[0], 0.0))
+    levels = [numbers(shift.magnitude(level)) for level in (1, 2, 3)]
+    for fraction in np.random.default_rng(0).uniform(size=200):
+        drawn = numbers(shift.magnitude(float(fraction)))
+        for k, value in enumerate(drawn):
+            low, high = sorted((start[k], levels[0][k]))
+            assert low <= value <= high and all(value != level[k] for level in levels)
+
+
+def test_all_train_is_every_trainable_shift_and_the_wholly_held_out_have_no_range():
+    assert {s.name for s in parse_shifts("all:train")} == {n for n, s in SHIFTS.items() if s.trainable}
+    assert not WHOLLY_HELD_OUT & {s.name for s in parse_shifts("all:train")}
+    for name in (*WHOLLY_HELD_OUT, "action-delay"):
+        with pytest.raises(ConfigError, match="has no training range"):
+            parse_shifts(f"{name}:train")
+
+
+def test_a_training_draw_follows_the_episodes_seed_and_stays_below_level_1_in_the_sim():
+    plain, env, again = new_env(seed=0), new_env(seed=0, shift="camera-pose:train,box-mass:train"), None
+    try:
+        again = new_env(seed=0, shift="camera-pose:train,box-mass:train")
+        fractions = []
+        for seed in (1, 2, 3):
+            for e in (plain, env, again):
+                e.reset(seed=seed)
+            drawn = env.shifts.record
+            assert drawn == again.shifts.record and drawn["camera-pose"]["level"] == "train"
+            fraction = drawn["camera-pose"]["fraction"]
+            fractions.append(fraction)
+            cam = env.mj_model.camera("sensor").id
+            moved = np.linalg.norm(env.mj_data.cam_xpos[cam] - plain.mj_data.cam_xpos[cam])
+            assert moved == pytest.approx(0.005 * fraction, abs=1e-6) and moved < 0.005  # level 1: 0.5 cm
+            box = env.plant.pool.body[0]
+            assert 0.5 <= env.mj_model.body_mass[box] < 1.0  # as built 0.5 kg, level 1 1.0 kg
+        assert len(set(fractions)) == 3
+    finally:
+        for e in (plain, env, again):
+            if e is not None:
+                e.close()
+
+
+@pytest.mark.parametrize("given, named", [
+    ("camera-pose:2", "held-out level 2 of 'camera-pose'"), ("all:1", "held-out level 1"),
+    ("box-shape:1", "'box-shape' has no training range"), ("novel-distractors:train", "has no training range")])
+def test_recording_into_a_held_out_range_exits_2_naming_it(capsys, tmp_path, given, named):
+    assert exit_status(collect_main, ["--episodes", "1", "--out", str(tmp_path / "d"), "--shift", given]) == 2
+    assert exit_status(baseline_main, ["--recipe", "camera-snapshot-dr", f"--demos.shift={given}",
+                                       "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(named in line for line in err)
+    assert not (tmp_path / "d").exists() and not (tmp_path / "b").exists()
+
+
+def test_the_dr_recipe_records_every_training_range_and_its_dataset_says_so():
+    recipe = get_recipe("camera-snapshot-dr")
+    plain = get_recipe("camera-snapshot")
+    assert {s.name for s in parse_shifts(recipe.demos.shift)} == {n for n, s in SHIFTS.items() if s.trainable} - {
+        "box-size"} and recipe.label == f"{plain.label}, randomised shifts"
+    command = collect_command(recipe, "default", 0, 8, 1)
+    assert f"--shift={recipe.demos.shift}" in command
+    assert "--shift" not in " ".join(collect_command(plain, "default", 0, 8, 1))
+    assert "shift" not in plain.to_json()["demos"] and recipe.to_json()["demos"]["shift"] == recipe.demos.shift
+    config = collect_args(["--shift", "camera-pose:train"])
+    assert config.settings()["shift"] == "camera-pose:train"
+    assert "shift" not in collect_args([]).settings()
