@@ -42,6 +42,39 @@ def test_readme_is_a_landing_page():
         assert f"(docs/{page}.md)" in README.read_text(), f"README's map of the docs misses docs/{page}.md"
 
 
+REFERENCE_LINES = 300  # a reference page; run logs, single runs' timings and diagnoses go to docs/studies/
+
+
+@pytest.mark.parametrize("page", sorted((REPO / "docs").glob("*.md")), ids=lambda p: p.name)
+def test_a_reference_page_stays_a_reference(page):
+    lines = len(page.read_text().splitlines())
+    assert lines <= REFERENCE_LINES, f"docs/{page.name} has {lines} lines: move run logs and diagnoses to docs/studies/"
+
+
+def map_section(lines: list[str], folder: str) -> str:
+    """The lines of docs/architecture.md's map under ``folder`` (``colorsort/cell``): its line and every deeper one."""
+    for part in folder.split("/"):
+        start = next(i for i, line in enumerate(lines) if line.lstrip().startswith(part + "/"))
+        indent = len(lines[start]) - len(lines[start].lstrip())
+        end = next((i for i in range(start + 1, len(lines)) if lines[i].strip()
+                    and len(lines[i]) - len(lines[i].lstrip()) <= indent), len(lines))
+        lines = lines[start:end]
+    return "\n".join(lines)
+
+
+def test_the_architecture_map_lists_every_module_and_every_shipped_baseline():
+    page = (REPO / "docs" / "architecture.md").read_text()
+    tree = page.split("```")[1].splitlines()
+    package = REPO / "colorsort"
+    missing = [str(f.relative_to(package)) for f in sorted(package.rglob("*.py")) if f.name != "__init__.py"
+               and not re.search(rf"(?<![\w/]){re.escape(f.name)}",
+                                 map_section(tree, "/".join(("colorsort", *f.relative_to(package).parts[:-1]))))]
+    assert not missing, f"docs/architecture.md's map misses {missing}"
+    shipped = [d.name for d in sorted((REPO / "baselines").iterdir()) if (d / "README.md").is_file()]
+    baselines = map_section(tree, "baselines")
+    assert not [b for b in shipped if f"{b}/" not in baselines], "the map misses a shipped baseline"
+
+
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(REPO)))
 def test_every_link_resolves_inside_the_repository(page):
     for target in LINK.findall(FENCE.sub("", page.read_text())):
