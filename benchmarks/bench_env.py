@@ -14,11 +14,13 @@ import argparse
 import copy
 import time
 
+import colorsort  # noqa: F401 - first: it picks the headless GL backend (MUJOCO_GL) before MuJoCo loads one
+
+# isort: split
 import mujoco
 import numpy as np
 import robosuite as suite
 
-import colorsort  # noqa: F401
 from colorsort.cell.cameras import CAMERAS, WRIST_CAMERA_MJCF
 from colorsort.results import recorded
 

@@ -66,6 +66,29 @@ def test_missing_gl_backend_gives_a_clear_message(tmp_path):
     assert "MUJOCO_GL='osmesa'" in proc.stderr and "MUJOCO_GL=egl" in proc.stderr
 
 
+def plain_shell() -> dict[str, str]:
+    """The environment of a shell with the venv active and nothing else set: no MUJOCO_GL, as make exports."""
+    return {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"} | {"COLORSORT_RESULTS": "none"}
+
+
+def test_a_benchmark_script_runs_from_a_plain_shell():
+    """docs/speed.md's command with no MUJOCO_GL: the script imports colorsort (the headless default) first."""
+    proc = subprocess.run([sys.executable, "benchmarks/bench_env.py", "--seconds", "0.05"], capture_output=True,
+                          text=True, cwd=ROOT, env=plain_shell(), timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "frames/s" in proc.stdout
+
+
+def test_mujoco_imported_before_colorsort_gets_a_message_naming_the_backend_it_loaded(tmp_path):
+    code = "import mujoco, robosuite, colorsort; from colorsort.cell.rendering import check_gl; check_gl()"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path,
+                          env=plain_shell() | {"DISPLAY": ""}, timeout=120)
+    if proc.returncode == 0:
+        pytest.skip("MuJoCo's default backend renders here (a display): nothing to explain")
+    assert "MuJoCo loaded its 'glfw' backend before MUJOCO_GL was 'egl'" in proc.stderr
+    assert "Import colorsort before mujoco" in proc.stderr
+
+
 def test_find_python_names_a_312_interpreter_or_says_what_to_install(tmp_path):
     """make's interpreter search: LeRobot 0.6 needs Python >= 3.12."""
     script = ROOT / "tools" / "find-python"

@@ -51,9 +51,27 @@ def is_gl_failure(error: BaseException) -> bool:
     return False
 
 
+LOADED_FIRST = (
+    "\nMuJoCo loaded its {loaded!r} backend before MUJOCO_GL was {backend!r}: it was imported before colorsort, "
+    "which sets the headless default. Import colorsort before mujoco (and robosuite), or set MUJOCO_GL in the shell."
+)
+
+
+def loaded_backend() -> str | None:
+    """The GL backend MuJoCo's renderer loaded when it was imported (``egl``, ``osmesa``, ``glfw``...); None before."""
+    module = sys.modules.get("mujoco.rendering.classic.gl_context")
+    context = getattr(module, "GLContext", None)
+    return None if context is None else str(context.__module__).rsplit(".", 1)[-1]
+
+
 def gl_error(error: BaseException) -> RuntimeError:
-    """A ``RuntimeError`` that explains how to get a GL backend, wrapping ``error``."""
-    return RuntimeError(GL_HELP.format(backend=os.environ.get("MUJOCO_GL"), error=error))
+    """A ``RuntimeError`` that explains how to get a GL backend, wrapping ``error``; it names the backend MuJoCo
+    loaded, and says so where that is not the one ``MUJOCO_GL`` asks for now."""
+    backend, loaded = os.environ.get("MUJOCO_GL"), loaded_backend()
+    text = GL_HELP.format(backend=backend, error=error)
+    if loaded and loaded != (backend or "").lower():
+        text += LOADED_FIRST.format(loaded=loaded, backend=backend)
+    return RuntimeError(text)
 
 
 def check_gl() -> None:
