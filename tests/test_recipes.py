@@ -413,7 +413,7 @@ def test_the_experts_changed_settings_reach_the_demos_and_daggers_labels_and_key
     ``--expert``, so the demos and the labels come from one expert and no cache of the preset's is reused; an
     unknown setting or a value out of range is refused with the valid choices."""
     from colorsort.training import stages
-    from colorsort.training.stages import collect_command, label, part_settings
+    from colorsort.training.stages import collect_command, collect_config, label, part_settings
 
     _, recipe = colorsort_baseline.parse_args(
         ["--recipe", "camera-tracking", "--demos.expert=press:0.01,track_hold_time:0.15"])
@@ -422,7 +422,8 @@ def test_the_experts_changed_settings_reach_the_demos_and_daggers_labels_and_key
     for k, variant in enumerate(recipe.demos.train_variants):
         command = collect_command(recipe, variant, k, 24, 2)
         assert "--expert=press:0.01,track_hold_time:0.15" in command
-        assert part_settings(command) != part_settings(collect_command(preset, variant, k, 24, 2))
+        assert (part_settings(collect_config(recipe, variant, k, 24, 2))
+                != part_settings(collect_config(preset, variant, k, 24, 2)))
         assert not any(a.startswith("--expert") for a in collect_command(preset, variant, k, 24, 2))
     ran: list[list[str]] = []
     monkeypatch.setattr(stages, "run", lambda command, log: ran.append(command))  # what it would run, not a run

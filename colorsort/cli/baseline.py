@@ -22,9 +22,10 @@ README of how it was made. ``--add-to DIR`` adds the run's training seeds to the
 same recipe and flags but ``--training.seeds``, which names seeds it does not hold): its scores, tables and README
 gain their rows, its policy stays. So a row's seeds can be trained in separate sittings, on other machines.
 
-Finished stages under OUT are reused, each named by a key of the settings that feed it
-(``colorsort.training.cache``), so an interrupted run goes on where it stopped, ``--until`` splits the work
-into sittings, and a changed setting makes the stages it feeds anew; ``--fresh`` starts over.
+Finished stages under OUT are reused, each named by a key of the typed settings that feed it and the versions
+of the code that made its data (``colorsort.training.cache``, ``colorsort.versions``), so an interrupted run
+goes on where it stopped, ``--until`` splits the work into sittings, and a changed setting or a changed expert,
+cell or recorder makes the stages it feeds anew; ``--fresh`` starts over.
 Exit status 0 done, 1 a stage failed, 2 bad arguments or an OUT holding a stage of other settings.
 """
 

@@ -3,7 +3,9 @@
 A stage's folder or file is ``<stem>-<key>``: the stem says what it is for a reader (``jitter-8``,
 ``demos-48``), the key is the first 8 hex digits of the SHA-256 of its settings as sorted JSON, so any
 setting that changes what a stage makes (a new perturbation, a learning rate) names another folder without
-anyone inventing a suffix for it. Each stage folder keeps its settings in ``stage.json`` for the reader.
+anyone inventing a suffix for it. The settings are typed (a ``CollectConfig``'s, not a command line's: a renamed
+flag keys nothing) and hold the versions of the code that made the data (``colorsort.versions``), so a changed
+expert, cell or recorder names new folders. Each stage folder keeps its settings in ``stage.json`` for the reader.
 """
 
 from __future__ import annotations

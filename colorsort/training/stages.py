@@ -1,6 +1,7 @@
 """The pipeline's stages, each a documented command run as a subprocess, each reused when already finished.
 
-Every cached stage is named ``<stem>-<key>``, the key derived from the settings that feed it (``cache``).
+Every cached stage is named ``<stem>-<key>``, the key derived from the typed settings that feed it and the
+versions of the code that makes its data (``cache``, ``colorsort.versions``).
 Layout of the working folder ``out``::
 
     data/<variant>-<n>-<key>/  colorsort-collect's dataset of n demos on one variant; stage.json its settings
@@ -40,6 +41,8 @@ from colorsort.training import cache
 from colorsort.training.partial_runs import first_updates, longer_run, resume_marker
 from colorsort.training.recipes import Recipe
 from colorsort.training.weights import average, derived_copy, saved_every, store
+from colorsort.variants import get_variant
+from colorsort.versions import code_versions
 
 REPO_ID = "local/colorsort-baseline"
 BIN = Path(sys.executable).parent  # the console scripts of this interpreter's environment
@@ -68,10 +71,11 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     a camera policy must see the boxes, not read them from the simulator."""
     demos = recipe.demos
     split = demos.split(n)
-    commands = {variant: collect_command(recipe, variant, k, count, workers)
-                for k, (variant, count) in enumerate(split.items())}
-    parts = {variant: out / "data" / cache.name(f"{variant}-{split[variant]}", part_settings(cmd))
-             for variant, cmd in commands.items()}
+    configs = {variant: collect_config(recipe, variant, k, count, workers)
+               for k, (variant, count) in enumerate(split.items())}
+    commands = {variant: command_of(config) for variant, config in configs.items()}
+    parts = {variant: out / "data" / cache.name(f"{variant}-{split[variant]}", part_settings(config))
+             for variant, config in configs.items()}
     merged = {"parts": [p.name for p in parts.values()], "drop_box_state": bool(demos.cameras)}
     root = out / "data" / cache.name(f"demos-{n}", merged)
     marker = root / "meta" / "complete"
@@ -86,7 +90,7 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
         if not (part / "meta" / "colorsort.json").is_file():
             shutil.rmtree(part, ignore_errors=True)
             run([*commands[variant], "--out", str(part)], out / "logs" / f"collect-{part.name}.log")
-            cache.remember(part, part_settings(commands[variant]))
+            cache.remember(part, part_settings(configs[variant]))
         else:
             print(f"reusing {part}")
     merge(list(parts.values()), root, drop_box_state=bool(demos.cameras))
@@ -94,25 +98,39 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     return root
 
 
+def collect_config(recipe: Recipe, variant: str, k: int, count: int, workers: int) -> CollectConfig:
+    """What ``colorsort-collect`` records of ``count`` demos of training variant ``variant`` (the k-th)."""
+    demos, v = recipe.demos, get_variant(variant)
+    return CollectConfig(episodes=count, boxes_per_episode=demos.boxes(variant), preset=v.preset, robot=v.robot,
+                         variant=variant, seed=SEED_STRIDE * k, repo_id=REPO_ID, cameras=demos.cameras,
+                         image_size=(demos.image_size, demos.image_size), workers=workers,
+                         perturbations=demos.perturbations_on(variant), turn_to_box=demos.turn_to_box,
+                         expert=demos.expert, shift=demos.shift)
+
+
+def command_of(config: CollectConfig) -> list[str]:
+    """The ``colorsort-collect`` command that records ``config`` (a recipe's part), without ``--out``."""
+    return ([str(BIN / "colorsort-collect"), "--variant", str(config.variant), "--episodes", str(config.episodes),
+             "--boxes-per-episode", str(config.boxes_per_episode), "--seed", str(config.seed),
+             "--cameras", ",".join(config.cameras) or "none", "--image-size", str(config.image_size[0]),
+             "--workers", str(config.workers), "--repo-id", config.repo_id]
+            + [f"--{p.name.replace('_', '-')}={p.text}" for p in config.perturbations]
+            + ([] if config.turn_to_box else ["--no-turn"])
+            + ([f"--expert={changes_text(config.expert)}"] if config.expert else [])
+            + ([f"--shift={config.shift}"] if config.shift else []))
+
+
 def collect_command(recipe: Recipe, variant: str, k: int, count: int, workers: int) -> list[str]:
     """``colorsort-collect`` of ``count`` demos of training variant ``variant`` (the k-th), without ``--out``."""
-    demos = recipe.demos
-    return ([str(BIN / "colorsort-collect"), "--variant", variant, "--episodes", str(count),
-             "--boxes-per-episode", str(demos.boxes(variant)), "--seed", str(SEED_STRIDE * k),
-             "--cameras", ",".join(demos.cameras) or "none", "--image-size", str(demos.image_size),
-             "--workers", str(workers), "--repo-id", REPO_ID]
-            + [f"--{p.name.replace('_', '-')}={p.text}" for p in demos.perturbations_on(variant)]
-            + ([] if demos.turn_to_box else ["--no-turn"])
-            + ([f"--expert={changes_text(demos.expert)}"] if demos.expert else [])
-            + ([f"--shift={demos.shift}"] if demos.shift else []))
+    return command_of(collect_config(recipe, variant, k, count, workers))
 
 
-def part_settings(command: list[str]) -> dict:
-    """What a part's demos depend on: its ``colorsort-collect`` arguments (workers aside: the same seeds give the
-    same data whatever their number)."""
-    args = command[1:]
-    dropped = {i for i, a in enumerate(args) if a == "--workers"}
-    return {"colorsort-collect": [a for i, a in enumerate(args) if i not in dropped and i - 1 not in dropped]}
+def part_settings(config: CollectConfig) -> dict:
+    """What a part's demos depend on, the key of its cache: what it records (``CollectConfig.settings`` and the
+    episodes; not the workers, nor how a flag is spelt: the same seeds give the same data) and the versions of the
+    code that records it (the expert, the cell, the recorder)."""
+    return {"collect": {**config.settings(), "episodes": config.episodes},
+            "code": code_versions("expert", "cell", "recorder")}
 
 
 def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
@@ -153,7 +171,8 @@ def label(recipe: Recipe, model: Path, variant: str, k: int, round_: int, out: P
         args.append(f"--expert={changes_text(recipe.demos.expert)}")
     if not recipe.demos.turn_to_box:
         args.append("--no-turn")
-    settings = {"colorsort-takeover": ["--policy", checkpoint_name(model), *args]}
+    settings = {"colorsort-takeover": ["--policy", checkpoint_name(model), *args],
+                "code": code_versions("expert", "cell", "recorder")}
     root = out / "data" / cache.name(f"labels-{variant}-r{round_}", settings)
     if (root / cache.SETTINGS_FILE).is_file():
         print(f"reusing {root}")
@@ -353,7 +372,8 @@ def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, stem: Pat
         settings += ["--seed", str(first_seed)]
     if recipe.evaluation.episode_length:
         settings += ["--episode-length", str(recipe.evaluation.episode_length)]
-    path = stem.with_name(cache.name(stem.name, {"colorsort-eval --variant": settings}) + ".json")
+    path = stem.with_name(cache.name(stem.name, {"colorsort-eval --variant": settings,
+                                                 "code": code_versions("cell")}) + ".json")
     if path.is_file():
         print(f"reusing {path}")
         return json.loads(path.read_text())
