@@ -33,7 +33,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
 import numpy as np  # noqa: E402
 
-from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, episode_seeds, observation_settings  # noqa: E402
+from colorsort.benchmark.evaluate import EpisodeRunner, EvalConfig, episode_seeds, observation_settings  # noqa: E402
 from colorsort.benchmark.outcomes import OFFSET_BANDS  # noqa: E402
 from colorsort.benchmark.policies import ExpertPolicy  # noqa: E402
 from colorsort.config import BIN_COLORS  # noqa: E402
@@ -161,7 +161,7 @@ def main() -> None:
         p.error("--expert changes the scripted expert's settings: give it with --policy expert")
     variant = get_variant(args.variant)
     cameras, size = observation_settings(args.policy, None, None)
-    runner = EpisodeRunner(EvalSettings(args.policy, variant.name, size, cameras))
+    runner = EpisodeRunner(EvalConfig(args.policy, variant.name, size, cameras))
     if args.expert:
         runner.policy = ExpertPolicy(changed(expert_preset(variant.task_config.tracking), parse_changes(args.expert)))
     boxes: list[Descent] = []

@@ -19,7 +19,8 @@ from colorsort.cli.eval import main as eval_main
 from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
-from colorsort.training import cache, stages
+from colorsort.training import cache
+from colorsort.training import pipeline_stages as stages
 from colorsort.training.recipes import get_recipe
 
 
@@ -174,10 +175,10 @@ def test_the_camera_recipe_runs_in_small(tmp_path, in_process, capsys):
     assert config["pretrained_backbone_weights"] is None and config["dim_model"] == 128
     assert "| default | ACT, sensor+wrist | 1 | 2 steps" in printed
 
-    from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, observation_settings
+    from colorsort.benchmark.evaluate import EpisodeRunner, EvalConfig, observation_settings
 
     assert observation_settings(str(model), None, None) == (("sensor", "wrist"), (32, 32))
-    runner = EpisodeRunner(EvalSettings(str(model), "default", (32, 32), ("sensor", "wrist"), episode_length=3))
+    runner = EpisodeRunner(EvalConfig(str(model), "default", (32, 32), ("sensor", "wrist"), episode_length=3))
     obs, _ = runner.env.reset(seed=0)
     assert set(obs["pixels"]) == {"sensor", "wrist"} and obs["pixels"]["wrist"].shape == (32, 32, 3)
     runner.close()
@@ -334,7 +335,7 @@ def test_a_finetuning_dagger_round_trains_the_policy_that_played_further(tmp_pat
 
 def test_each_training_seed_of_a_shifted_recipe_keeps_its_own_timing(tmp_path, monkeypatch):
     """Each seed's run has a timing file of its own (a learning curve measures minutes from that run's start)."""
-    from colorsort.training import stages
+    from colorsort.training import pipeline_stages as stages
 
     def fake_training(cmd: list[str], log: Path) -> float:  # what lerobot-train leaves, in no time
         run_dir = Path(next(a for a in cmd if a.startswith("--output_dir=")).split("=", 1)[1])
@@ -377,7 +378,7 @@ def test_a_run_resumed_twice_counts_only_the_training_it_kept(tmp_path, monkeypa
     """Killed after its first checkpoint, resumed, killed again before the next one and resumed again: the run's
     training time is the time to its first checkpoint plus the last segment's; the waits and the lost updates are
     not, and its checkpoints' minutes agree with that. lerobot-train is asked to resume, into the same folder."""
-    from colorsort.training import stages
+    from colorsort.training import pipeline_stages as stages
 
     recipe = get_recipe("camera")
     run_dir = tmp_path / "train" / f"demos-8-2steps-{cache.key(stages.train_settings(recipe))}-seed1000"
@@ -417,7 +418,7 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
     """With no schedule, a run of 2 updates is the first 2 of a run of 3 with the same data, settings and seed:
     taken from it (checkpoints, save times, its time to reach 2) instead of trained. Never from another seed's
     run, a cosine one (its rate depends on the total) or one without that checkpoint."""
-    from colorsort.training import stages
+    from colorsort.training import pipeline_stages as stages
 
     trained = []
     monkeypatch.setattr(stages, "run", lambda cmd, log, append=False: trained.append(cmd) or 0.0)
@@ -451,7 +452,7 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
 def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path, in_process):
     """``boxes_by_variant``: the seed variant's demos hold one box each, in a part of their own, merged; the merged
     set's key comes from its parts, so another mix is another set, never the seed variant's trained on."""
-    from colorsort.training.stages import collect, size
+    from colorsort.training.pipeline_stages import collect, size
 
     recipe = get_recipe("state", {"demos.train_mix": (("seed", 1.0),), "demos.counts": (1,),
                                   "demos.boxes_by_variant": (("seed", 1),), "demos.late_pass": LatePass(0)})
@@ -474,7 +475,7 @@ def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_pa
     and keys their parts: dim lights for the random-lights variant alone, late picks for both; ``--no-turn`` too.
     One that applies to no training variant (late picks on a tracking belt, dim lights without a lit variant) is
     refused, and a bad value names its range."""
-    from colorsort.training.stages import collect, collect_command, size
+    from colorsort.training.pipeline_stages import collect, collect_command, size
 
     _, recipe = colorsort_baseline.parse_args([
         "--recipe", "state", "--demos.train_mix=lighting:1,default:1", "--demos.counts=2",
@@ -504,8 +505,8 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
     """On the moving belt ACT averages its chunks; the stopping belt's recipes execute 10 actions open-loop.
     Training never reads n_action_steps or temporal_ensemble_coeff, so a reused run (trained with other values)
     gets the recipe's in every checkpoint's config, and its evaluations are filed under the new execution."""
-    from colorsort.training.policy_settings import ActSettings
-    from colorsort.training.stages import set_inference
+    from colorsort.training.pipeline_stages import set_inference
+    from colorsort.training.policy_config import ActConfig
 
     act = get_recipe("camera-tracking").policy
     assert (act.type, act.n_action_steps, act.temporal_ensemble_coeff, act.execution) == ("act", 1, 0.2, "ens0.2")
@@ -513,9 +514,9 @@ def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_th
     assert get_recipe("state").policy.execution == get_recipe("camera").policy.execution == "chunk10"
     assert get_recipe("state-tracking").policy == act
     with pytest.raises(ValueError, match="n_action_steps=1"):
-        ActSettings(n_action_steps=10, temporal_ensemble_coeff=0.01)
+        ActConfig(n_action_steps=10, temporal_ensemble_coeff=0.01)
     with pytest.raises(ValueError, match="chunk_size"):
-        ActSettings(n_action_steps=30)
+        ActConfig(n_action_steps=30)
 
     run_dir = tmp_path / "run"
     for step in ("000001", "000002"):
@@ -586,7 +587,7 @@ def test_the_checkpoint_scored_is_chosen_on_validation_seeds_never_the_evaluatio
         "training.seeds": (1000, 1001), "evaluation.variants": ("tracking", "tracking-jitter"),
         "evaluation.episodes": 4, "evaluation.other_episodes": 4, "evaluation.curve_episodes": 4})
     ship_to = tmp_path / "shipped"
-    results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / "out", envs=1), "cmd", ship_to)
+    results = pipeline.run_pipeline(recipe, pipeline.RunConfig(tmp_path / "out", envs=1), "cmd", ship_to)
 
     first = VALIDATION_SEEDS[0]
     chose = [e[:3] for e in evaluated if e[2] is not None]
@@ -634,7 +635,7 @@ def test_a_dagger_round_rolls_out_the_last_checkpoint_or_the_one_validation_choo
     for rollout, checkpoint, key in (("last", "last", run), ("chosen", "000002", f"{run}@2")):
         drove.clear()
         recipe = get_recipe("state-tracking", {**flags, "dagger.rollout": rollout})
-        results = pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / rollout, envs=1), "cmd")
+        results = pipeline.run_pipeline(recipe, pipeline.RunConfig(tmp_path / rollout, envs=1), "cmd")
         assert drove == [(run, checkpoint, key)]  # the labels' cache key names the update unless it is the last
         assert [(r.seed, r.checkpoint) for r in results.rows] == [(1000, 2)]
         assert {e[3] for e in evaluated if e[0] == "000002" and e[2] is None} == {"eval"}
@@ -673,7 +674,7 @@ def test_a_dagger_round_plays_only_the_variants_it_names_with_their_own_takeover
         played.clear()
         joined.clear()
         recipe = get_recipe("state-tracking", {**flags, "dagger.variants": variants})
-        pipeline.run_pipeline(recipe, pipeline.RunSettings(tmp_path / (variants[0] if variants else "all"), envs=1),
+        pipeline.run_pipeline(recipe, pipeline.RunConfig(tmp_path / (variants[0] if variants else "all"), envs=1),
                               "cmd")
         assert played == expected
         assert joined == [[f"labels-{v}-r1" for v, _ in expected]]
@@ -699,7 +700,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     shipped in DIR: its scores, tables and README gain their rows and the sitting, its policy and learning curve stay
     the first seed's; another recipe, a seed it holds, no baseline there, or --ship beside it: exit 2, nothing run."""
     from colorsort.training import tables
-    from colorsort.training.records import Results
+    from colorsort.training.results_file import PipelineResults
 
     best = {(1000, 2): 2, (1001, 3): 2}  # successes on the validation seeds, per (seed, update); else 0
     evaluated = fake_stages(monkeypatch, lambda seed, step, validating: best.get((seed, step), 0) if validating
@@ -711,7 +712,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     first = flags + ["--training.seeds=1000", "--out", str(tmp_path / "one"), "--ship", str(shipped)]
     assert baseline_main(first, capsys)[0] == 0
     curve_png = (shipped / "learning_curve.png").read_bytes()
-    before = Results.load(shipped / "scores.json")
+    before = PipelineResults.load(shipped / "scores.json")
     assert before.seeds == (1000,) and before.commit and not before.added
 
     later = flags + ["--training.seeds=1001", "--out", str(tmp_path / "two")]
@@ -728,7 +729,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     status, printed = baseline_main(later + ["--add-to", str(shipped)], capsys)
     assert status == 0 and "added training seeds [1001] to" in printed
     assert "curve" not in [e[3] for e in evaluated]  # the baseline's curve is its first seed's
-    after = Results.load(shipped / "scores.json")
+    after = PipelineResults.load(shipped / "scores.json")
     assert after.seeds == (1000, 1001) and after.recipe["training"]["seeds"] == [1000, 1001]
     assert after.rows[:2] == before.rows and [(r.seed, r.checkpoint) for r in after.rows[2:]] == [(1001, 3)] * 2
     assert after.curve == before.curve and after.commit == before.commit and after.command == before.command

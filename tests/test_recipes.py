@@ -20,8 +20,8 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
     """Its command line: LeRobot's diffusion type, GroupNorm, no pretrained weights (a download), one shared
     encoder, a crop of 0.9 of the recipe's image side; its settings refuse what LeRobot would reject later."""
     from colorsort.cli.baseline import main
-    from colorsort.training.policy_settings import DiffusionSettings
-    from colorsort.training.stages import train_command
+    from colorsort.training.pipeline_stages import train_command
+    from colorsort.training.policy_config import DiffusionConfig
 
     recipe = get_recipe("camera-diffusion")
     cmd = train_command(recipe, tmp_path / "demos-48", 5000, 1000, tmp_path / "run")
@@ -34,11 +34,11 @@ def test_the_diffusion_recipe_asks_lerobot_train_for_a_small_from_scratch_encode
     assert recipe.policy.execution == "chunk8-ddim10" and recipe.label.startswith("Diffusion Policy, ")
     assert not any(a.startswith("--policy.type=act") or "dim_model" in a for a in cmd)
     with pytest.raises(ValueError, match="multiple of"):
-        DiffusionSettings(horizon=10)
+        DiffusionConfig(horizon=10)
     with pytest.raises(ValueError, match="n_action_steps"):
-        DiffusionSettings(n_action_steps=17)
+        DiffusionConfig(n_action_steps=17)
     with pytest.raises(ValueError, match="crop_fraction"):
-        DiffusionSettings(crop_fraction=0.2)
+        DiffusionConfig(crop_fraction=0.2)
     assert exit_status(main, ["--recipe", "camera-diffusion", "--policy.lr_schedule=cosine",
                               "--out", str(tmp_path)]) == 2
 
@@ -47,8 +47,8 @@ def test_the_diffusion_recipe_takes_its_denoiser_settings_and_names_its_evaluati
     """What the U-Net predicts, the schedulers and the rate reach ``lerobot-train``; the scheduler and the denoising
     steps are inference settings (a new run folder only for what changes the weights), and the evaluation's file
     name carries them, so that an evaluation under other ones is never reused; bad values name the valid ones."""
-    from colorsort.training.policy_settings import DiffusionSettings
-    from colorsort.training.stages import train_command, train_settings
+    from colorsort.training.pipeline_stages import train_command, train_settings
+    from colorsort.training.policy_config import DiffusionConfig
 
     preset = get_recipe("camera-diffusion")
     for arg in ("--policy.prediction_type=sample", "--policy.noise_scheduler_type=DDIM",
@@ -68,17 +68,17 @@ def test_the_diffusion_recipe_takes_its_denoiser_settings_and_names_its_evaluati
     assert (recipe.policy.execution, ddim.policy.execution) == ("chunk8-ddpm10", "chunk8-ddim10")
     assert ddim.policy.inference()["noise_scheduler_type"] == "DDIM"
     with pytest.raises(ValueError, match=r"valid types are \['epsilon', 'sample'\]"):
-        DiffusionSettings(prediction_type="v_prediction")
+        DiffusionConfig(prediction_type="v_prediction")
     with pytest.raises(ValueError, match=r"valid schedulers are \['DDPM', 'DDIM'\]"):
-        DiffusionSettings(noise_scheduler_type="PNDM")
+        DiffusionConfig(noise_scheduler_type="PNDM")
     with pytest.raises(ValueError, match="num_inference_steps=20: give 1 to num_train_timesteps"):
-        DiffusionSettings(num_train_timesteps=10, num_inference_steps=20)
+        DiffusionConfig(num_train_timesteps=10, num_inference_steps=20)
 
 
 def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(tmp_path):
     """``--policy.optimizer_lr``: ACT's rate in the ``lerobot-train`` command and a run folder of its own (a run at
     another rate is never reused); a policy without the field has no such flag."""
-    from colorsort.training.stages import train_command, train_settings
+    from colorsort.training.pipeline_stages import train_command, train_settings
 
     _, recipe = colorsort_baseline.parse_args(["--recipe", "camera", "--policy.optimizer_lr=3e-4",
                                                "--policy.optimizer_lr_backbone=3e-4"])
@@ -92,7 +92,7 @@ def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(
 def test_loader_processes_reach_lerobot_train_and_the_shipped_recipes_keep_one(tmp_path):
     """``--training.num_workers``: lerobot-train's data-loading processes (the shipped recipes' 1, so their cache keys
     are what they were); 0 loads in the training process; a negative count is refused naming the valid ones."""
-    from colorsort.training.stages import train_command
+    from colorsort.training.pipeline_stages import train_command
 
     _, recipe = colorsort_baseline.parse_args(["--recipe", "state", "--training.num_workers=0"])
     assert "--num_workers=0" in train_command(recipe, tmp_path / "demos", 10, 1000, tmp_path / "run")
@@ -108,7 +108,7 @@ def test_image_shifts_reach_lerobot_train_as_its_image_transforms(tmp_path):
     from lerobot.configs.default import DatasetConfig
     from lerobot.transforms.transforms import ImageTransforms
 
-    from colorsort.training.stages import train_command
+    from colorsort.training.pipeline_stages import train_command
 
     shifted = get_recipe("camera")
     args = shifted.training.augment_args()
@@ -136,7 +136,7 @@ def test_relit_training_images_vary_as_the_lighting_variant_but_keep_every_box_c
     from lerobot.configs.default import DatasetConfig
     from lerobot.transforms.transforms import ImageTransforms
 
-    from colorsort.training.stages import train_command
+    from colorsort.training.pipeline_stages import train_command
 
     _, relit = colorsort_baseline.parse_args(["--recipe", "camera", "--training.image_relight=true"])
     args = relit.training.augment_args()
@@ -201,11 +201,11 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
     assert json.loads(json.dumps(stored)) == stored
     assert stored["demos"]["perturbations"] == {"brightness": [0.45, 0.75], "late_pass": 100, "late_pick": 10}
     assert stored["policy"]["type"] == "act" and stored["training"]["steps"] == 4000
-    from colorsort.training.records import Results
+    from colorsort.training.results_file import PipelineResults
     from colorsort.training.tables import label
 
-    assert label(Results.from_json(scores([], stored))) == "ACT, snapshot"
-    assert label(Results.from_json(scores([], {"cameras": ["sensor", "wrist"]}))) == "ACT, sensor+wrist"  # flat
+    assert label(PipelineResults.from_json(scores([], stored))) == "ACT, snapshot"
+    assert label(PipelineResults.from_json(scores([], {"cameras": ["sensor", "wrist"]}))) == "ACT, sensor+wrist"  # flat
     assert "dagger" not in stored  # a recipe without DAgger's rounds is stored as before they were a setting
 
 
@@ -213,7 +213,7 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     import argparse
 
     from colorsort.training.flags import add_recipe_flags, recipe_changes
-    from colorsort.training.records import Results
+    from colorsort.training.results_file import PipelineResults
     from colorsort.training.tables import label
 
     recipe = get_recipe("state", {"dagger.rounds": 2, "dagger.episodes": 4, "dagger.handover": (10, 50)})
@@ -221,7 +221,7 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     stored = recipe.to_json()
     assert stored["dagger"] == {"rounds": 2, "episodes": 4, "handover": [10, 50], "rollout": "last",
                                 "retrain": "scratch", "updates": 0, "variants": []}
-    assert label(Results.from_json(scores([], stored))) == "ACT + DAgger (2 rounds), state"
+    assert label(PipelineResults.from_json(scores([], stored))) == "ACT + DAgger (2 rounds), state"
     parser = argparse.ArgumentParser()
     add_recipe_flags(parser, recipe)
     for text in ("10:50", "10,50"):  # a pair as a list of pairs spells it, and as --help shows it
@@ -248,13 +248,13 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
 
 
 def test_averaged_checkpoints_name_the_method_and_leave_its_inputs_apart():
-    from colorsort.training.methods import method_name
-    from colorsort.training.records import Results
+    from colorsort.training.method_names import method_name
+    from colorsort.training.results_file import PipelineResults
     from colorsort.training.tables import label
 
     recipe = get_recipe("camera-tracking", {"training.average": 2})
     assert recipe.label == "ACT (mean of 2 checkpoints), sensor+snapshot+wrist"
-    assert label(Results.from_json(scores([], recipe.to_json()))) == recipe.label
+    assert label(PipelineResults.from_json(scores([], recipe.to_json()))) == recipe.label
     method, _, inputs = recipe.label.partition(", ")  # how the methods table splits a label
     assert (method, inputs) == ("ACT (mean of 2 checkpoints)", "sensor+snapshot+wrist")
     assert method_name("act", 1, "finetune", 3) == "ACT (mean of 3 checkpoints) + DAgger (1 round, fine-tuned)"
@@ -360,7 +360,7 @@ def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_p
 
 def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
     """Two seeds' misplaced boxes add up per (colour, bin); correct and dropped boxes and smaller demo counts do not."""
-    from colorsort.training.records import Results
+    from colorsort.training.results_file import PipelineResults
     from colorsort.training.tables import render
 
     def row(seed: int, demos: int, boxes: list[tuple[str, str, str | None]]) -> dict:
@@ -370,10 +370,10 @@ def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
     rows = [row(1000, 48, [("red", "misplaced", "green"), ("blue", "correct", "blue"), ("red", "dropped", None)]),
             row(1001, 48, [("red", "misplaced", "green"), ("blue", "misplaced", "green")]),
             row(1000, 8, [("green", "misplaced", "red")])]
-    table = render(Results.from_json(scores(rows)), "mistakes")
+    table = render(PipelineResults.from_json(scores(rows)), "mistakes")
     assert table.splitlines()[2] == "| jitter | 3 | red -> green 2, blue -> green 1 |"
     clean = [row(1000, 48, [("red", "correct", "red")])]
-    assert render(Results.from_json(scores(clean)), "mistakes").endswith("| every variant | 0 | |")
+    assert render(PipelineResults.from_json(scores(clean)), "mistakes").endswith("| every variant | 0 | |")
 
 
 def test_a_shipped_readme_says_how_the_demos_were_made():
@@ -395,8 +395,8 @@ def test_a_shipped_readme_says_how_the_demos_were_made():
 def test_demos_without_the_wrists_turn_get_daggers_labels_without_it(tmp_path, monkeypatch):
     """``--demos.turn_to_box=false`` reaches colorsort-collect and colorsort-takeover alike as ``--no-turn``, so the
     labels come from the expert that made the demos."""
-    from colorsort.training import stages
-    from colorsort.training.stages import collect_command, label
+    from colorsort.training import pipeline_stages as stages
+    from colorsort.training.pipeline_stages import collect_command, label
 
     _, still = colorsort_baseline.parse_args(["--recipe", "camera", "--demos.turn_to_box=false"])
     turning = get_recipe("camera")
@@ -412,8 +412,8 @@ def test_the_experts_changed_settings_reach_the_demos_and_daggers_labels_and_key
     """``--demos.expert`` reaches colorsort-collect of every training variant and colorsort-takeover, as their
     ``--expert``, so the demos and the labels come from one expert and no cache of the preset's is reused; an
     unknown setting or a value out of range is refused with the valid choices."""
-    from colorsort.training import stages
-    from colorsort.training.stages import collect_command, collect_config, label, part_settings
+    from colorsort.training import pipeline_stages as stages
+    from colorsort.training.pipeline_stages import collect_command, collect_config, label, part_settings
 
     _, recipe = colorsort_baseline.parse_args(
         ["--recipe", "camera-tracking", "--demos.expert=press:0.01,track_hold_time:0.15"])

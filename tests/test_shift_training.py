@@ -11,8 +11,8 @@ from colorsort.cli.collect import parse_args as collect_args
 from colorsort.errors import ConfigError
 from colorsort.shifts import SHIFTS, parse_shifts
 from colorsort.shifts.base import between
+from colorsort.training.pipeline_stages import collect_command
 from colorsort.training.recipes import get_recipe
-from colorsort.training.stages import collect_command
 
 WHOLLY_HELD_OUT = {"box-shape", "novel-distractors"}  # the issue: no recipe ever sees them
 

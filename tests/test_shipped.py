@@ -172,12 +172,12 @@ def test_executions_are_compared_on_each_variant_named_and_on_validation_seeds_w
 
 @pytest.mark.parametrize("name", list(SHIPPED))
 def test_a_shipped_scores_json_reads_as_typed_records_and_writes_back_unchanged(name):
-    """Results as typed records: every shipped scores.json reads into ``Results`` and writes back the same JSON, so
+    """Typed records: every shipped scores.json reads into ``PipelineResults`` and writes back the same JSON, so
     the records change no figure of a shipped baseline."""
-    from colorsort.training.records import Results
+    from colorsort.training.results_file import PipelineResults
 
     stored = json.loads((SHIPPED[name] / "scores.json").read_text())
-    results = Results.from_json(stored)
+    results = PipelineResults.from_json(stored)
     assert results.to_json() == {**stored, "curve": stored.get("curve") or []}
     assert all(r.report.episodes == len(r.report.per_episode) for r in results.rows)
 

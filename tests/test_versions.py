@@ -8,9 +8,10 @@ import pytest
 from fingerprints import FINGERPRINTS, RECORDED, versions_of
 
 from colorsort import versions
-from colorsort.training import cache, stages
+from colorsort.training import cache
+from colorsort.training import pipeline_stages as stages
+from colorsort.training.pipeline_stages import collect_config, command_of, part_settings
 from colorsort.training.recipes import get_recipe
-from colorsort.training.stages import collect_config, command_of, part_settings
 
 
 @pytest.mark.parametrize("part", sorted(versions.VERSIONS))

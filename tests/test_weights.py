@@ -11,7 +11,8 @@ import pytest
 import torch
 from safetensors.torch import load_file, save_file
 
-from colorsort.training import cache, stages
+from colorsort.training import cache
+from colorsort.training import pipeline_stages as stages
 from colorsort.training.recipes import get_recipe
 from colorsort.training.weights import FULL, average, derived_copy, saved_every, store
 

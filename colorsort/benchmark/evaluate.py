@@ -47,7 +47,7 @@ def episode_seeds(variant: Variant, episodes: int, seed: int | None, shifted: bo
 
 
 @dataclass(frozen=True)
-class EvalSettings:
+class EvalConfig:
     """What every evaluation episode shares; each worker process builds its env and policy from it."""
 
     policy: str
@@ -67,7 +67,7 @@ POLICY_THREADS = 1
 class EpisodeRunner:
     """One env and one policy, built once per process, running episodes by seed."""
 
-    def __init__(self, settings: EvalSettings):
+    def __init__(self, settings: EvalConfig):
         self.threads_before: int | None = None
         if settings.policy not in ("expert", "random"):
             import torch
@@ -138,7 +138,7 @@ PRELOAD = ("colorsort.benchmark.evaluate",)  # what worker processes import once
 class EvalJob:
     """Episodes of one variant, by seed: one task of the executor."""
 
-    settings: EvalSettings
+    settings: EvalConfig
     seeds: tuple[int, ...]
 
 
@@ -221,7 +221,7 @@ def run_evaluation(policy_spec: str, variant_names: list[str], episodes: int, *,
     jobs, owner = [], []
     per_variant = max(1, executor.workers // len(variants))  # jobs per variant that keep every worker busy
     for k, variant in enumerate(variants):
-        settings = EvalSettings(path, variant.name, (image_size[0], image_size[1]), tuple(cameras), episode_length,
+        settings = EvalConfig(path, variant.name, (image_size[0], image_size[1]), tuple(cameras), episode_length,
                                 film, shift)
         for block in chunks(episode_seeds(variant, episodes, seed, bool(shift)), shard_size, per_variant):
             jobs.append(EvalJob(settings, tuple(block)))

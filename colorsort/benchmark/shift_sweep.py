@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from colorsort.benchmark.evaluate import EpisodeRunner, EvalSettings, run_jobs
+from colorsort.benchmark.evaluate import EpisodeRunner, EvalConfig, run_jobs
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
@@ -62,7 +62,7 @@ def sweep_arms(episodes: int, side_episodes: int, levels: tuple[int, ...] = (1, 
 class SweepJob:
     """Episodes of several arms, by (arm index, shift, seed): one task of the executor, one env and one policy."""
 
-    settings: EvalSettings  # without a shift: the job sets each arm's
+    settings: EvalConfig  # without a shift: the job sets each arm's
     episodes: tuple[tuple[int, tuple[str, ...], int], ...]
 
     @property
@@ -94,7 +94,7 @@ def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[i
     check_policy_spec(policy)
     get_variant(variant)
     path = policy if policy in ("expert", "random") else str(Path(policy).resolve())
-    settings = EvalSettings(path, variant, image_size, tuple(cameras), episode_length)
+    settings = EvalConfig(path, variant, image_size, tuple(cameras), episode_length)
     episodes = [(k, () if arm.shift == CONTROL else (arm.shift,), seed)
                 for k, arm in enumerate(arms) for seed in SHIFT_SEEDS[: arm.episodes]]
     jobs = [SweepJob(settings, tuple(block)) for block in chunks(episodes, shard_size, executor.workers)]

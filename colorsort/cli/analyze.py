@@ -53,13 +53,13 @@ def read(path: Path) -> dict:
 
 def plot_runs(files: list[Path], labels: list[str], out: Path) -> None:
     """Each run's learning curve (its first seed's checkpoints on its main variant) on one axis, written to ``out``."""
-    from colorsort.training.records import Results
     from colorsort.training.report import plot_curves
+    from colorsort.training.results_file import PipelineResults
     from colorsort.training.tables import machine, main_variant
 
     if len(labels) != len(files):
         raise ConfigError(f"--labels takes one label per file: {len(files)} files, {len(labels)} labels")
-    runs = [Results.load(f) for f in files]
+    runs = [PipelineResults.load(f) for f in files]
     if missing := [str(f) for f, r in zip(files, runs, strict=True) if not r.curve]:
         raise ConfigError(f"no learning curve in {', '.join(missing)}")
     variants = {main_variant(r) for r in runs}
@@ -100,12 +100,12 @@ def main(argv: list[str] | None = None) -> int:
         plot_runs(args.scores, args.labels.split(","), args.out)
     else:
         from colorsort.training.compare import compare
-        from colorsort.training.records import Results
+        from colorsort.training.results_file import PipelineResults
 
         labels = tuple(args.labels.split(","))
         if len(labels) != 2:
             raise ConfigError(f"--labels takes two comma-separated labels, got {args.labels!r}")
-        print(compare(Results.load(args.new), Results.load(args.old), (labels[0], labels[1])))
+        print(compare(PipelineResults.load(args.new), PipelineResults.load(args.old), (labels[0], labels[1])))
     return 0
 
 

@@ -40,7 +40,7 @@ from pathlib import Path
 from colorsort.cli.run import guarded
 from colorsort.errors import ConfigError, DataExistsError
 from colorsort.training.flags import add_recipe_flags, recipe_changes
-from colorsort.training.pipeline import UNTIL, RunSettings, run_pipeline
+from colorsort.training.pipeline import UNTIL, RunConfig, run_pipeline
 from colorsort.training.recipes import RECIPES, Recipe, get_recipe
 from colorsort.training.ship import addable
 
@@ -85,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
         for r in RECIPES.values():
             print(f"{r.name:<{width}}  {r.label:<{label_width}} {describe(r)}")
         return 0
-    settings = RunSettings(Path(args.out or f"outputs/baselines/{recipe.name}"), args.workers, args.envs, args.until)
+    settings = RunConfig(Path(args.out or f"outputs/baselines/{recipe.name}"), args.workers, args.envs, args.until)
     ship_to = Path(args.ship) if args.ship else None
     add_to = Path(args.add_to) if args.add_to else None
     if ship_to and add_to:

@@ -7,7 +7,7 @@ variants. An older run's ``scores.json`` comes from git: ``git show COMMIT:basel
 
 from __future__ import annotations
 
-from colorsort.training.records import Results, ScoreRow
+from colorsort.training.results_file import PipelineResults, ScoreRow
 from colorsort.training.tables import largest_by_variant
 
 
@@ -26,7 +26,7 @@ def mean_rate(rows: list[ScoreRow]) -> float:
     return 100 * sum(r.report.success_rate for r in rows) / len(rows)
 
 
-def compare(new: Results, old: Results, labels: tuple[str, str]) -> str:
+def compare(new: PipelineResults, old: PipelineResults, labels: tuple[str, str]) -> str:
     """The Markdown table of ``new`` beside ``old``, one line per variant of either."""
     a, b = largest_by_variant(new.rows), largest_by_variant(old.rows)
     head = [f"{labels[0]}: mean (each seed)", f"{labels[1]}: mean (each seed)",

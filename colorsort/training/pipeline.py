@@ -18,17 +18,18 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training import selection, stages
+from colorsort.training import pipeline_stages as stages
+from colorsort.training import selection
 from colorsort.training.recipes import Recipe
-from colorsort.training.records import CurvePoint, Results, ScoreRow, ValidationPoint, report_from_json
 from colorsort.training.report import first_episodes, plot_curve, plot_demos, summary_table, table
+from colorsort.training.results_file import CurvePoint, PipelineResults, ScoreRow, ValidationPoint, report_from_json
 from colorsort.training.ship import add_seeds, machine, ship
 
 UNTIL = ("data", "train", "eval")
 
 
 @dataclass(frozen=True)
-class RunSettings:
+class RunConfig:
     """How one run of the pipeline runs (not what it makes: that is the recipe).
 
     Attributes:
@@ -51,8 +52,8 @@ class RunSettings:
                 raise ConfigError(f"{key}={getattr(self, key)}: give at least 1")
 
 
-def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: Path | None = None,
-                 add_to: Path | None = None) -> Results | None:
+def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Path | None = None,
+                 add_to: Path | None = None) -> PipelineResults | None:
     """Every stage of ``recipe`` under ``settings.out``; the results (also written to ``out/results.json``), or None
     when ``settings.until`` stops before the evaluations. ``ship_to``: ship the first seed's policy there;
     ``add_to``: add this run's training seeds to the baseline shipped there (``ship.add_seeds``: its learning curve
@@ -107,7 +108,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
         plots.append(out / "learning_curve.png")
         plot_curve(curve, recipe.label, main, machine(training.device), plots[1])
     wall = time.perf_counter() - t0
-    results = Results(recipe.to_json(), command, started, round(wall, 1), tuple(rows), tuple(curve))
+    results = PipelineResults(recipe.to_json(), command, started, round(wall, 1), tuple(rows), tuple(curve))
     (out / "results.json").write_text(json.dumps(results.to_json(), indent=1))
     print(f"\n{summary_table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\n"
           f"results: {out / 'results.json'}\nwall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
@@ -118,7 +119,7 @@ def run_pipeline(recipe: Recipe, settings: RunSettings, command: str, ship_to: P
     return results
 
 
-def dagger(recipe: Recipe, settings: RunSettings, n: int, data: Path, run_dir: Path, timing: dict, steps: int,
+def dagger(recipe: Recipe, settings: RunConfig, n: int, data: Path, run_dir: Path, timing: dict, steps: int,
            seed: int) -> tuple[Path, dict, Path, int]:
     """DAgger's rounds after the first training (``recipe.dagger``): each round's policy (its last checkpoint, or
     with ``rollout="chosen"`` the one validation seeds choose) plays every training variant, the expert labels the
@@ -147,7 +148,7 @@ def dagger(recipe: Recipe, settings: RunSettings, n: int, data: Path, run_dir: P
                      "wall_s": round(earlier_s + timing["wall_s"], 1)}, data, steps
 
 
-def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
+def choose(recipe: Recipe, settings: RunConfig, run_dir: Path, timing: dict,
            steps: int) -> tuple[Path, int, list[ValidationPoint]]:
     """The checkpoint to score: (its pretrained_model, its update, the validation points it was chosen on).
 
@@ -163,7 +164,7 @@ def choose(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
     return (last if chosen == steps else next(m for step, _, m in found if step == chosen)), chosen, points
 
 
-def learning_curve(recipe: Recipe, settings: RunSettings, run_dir: Path, timing: dict,
+def learning_curve(recipe: Recipe, settings: RunConfig, run_dir: Path, timing: dict,
                    scored: list[ScoreRow], chosen: int) -> list[CurvePoint]:
     """Success on the main variant's first ``curve_episodes`` seeds at every checkpoint, with its training time.
 

@@ -3,7 +3,7 @@
 A recipe is everything ``colorsort-baseline`` needs to rebuild a baseline, in sections as
 ``lerobot-train``'s configuration has them: ``demos`` (which variants the expert's demos come from and in
 what proportion, the cameras recorded, the demonstrator's perturbations), ``policy`` (ACT or diffusion,
-``policy_settings``), ``training``, ``dagger`` (rounds of expert labels on the policy's own states, none by
+``policy_config``), ``training``, ``dagger`` (rounds of expert labels on the policy's own states, none by
 default) and ``evaluation``. Each section is a frozen dataclass that checks its own
 fields; ``Recipe`` checks how they fit together. Every field is a ``colorsort-baseline`` flag,
 ``--<section>.<field>=<value>`` (``flags``). The presets (``RECIPES``):
@@ -31,17 +31,15 @@ import json
 from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
-from colorsort.cell.cameras import check_cameras
-from colorsort.data.perturbations import Perturbation, canonical
+from colorsort.data.perturbations import Perturbation
 from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
-from colorsort.expert.config import changed, expert_preset
-from colorsort.shifts.registry import training_shifts
-from colorsort.training.dagger_settings import DaggerSettings
-from colorsort.training.methods import method_name
-from colorsort.training.policy_settings import LARGE_ACT, SMALL_ACT, SNAPSHOT_DIFFUSION, TRACKING_ACT, PolicySettings
+from colorsort.training.dagger_config import DaggerConfig
+from colorsort.training.demos_config import DemosConfig, at_least_one
+from colorsort.training.method_names import method_name
+from colorsort.training.policy_config import LARGE_ACT, SMALL_ACT, SNAPSHOT_DIFFUSION, TRACKING_ACT, PolicyConfig
 from colorsort.training.weights import WEIGHTS
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, VARIANTS, get_variant
 
@@ -54,98 +52,8 @@ DEVICES = ("cpu", "cuda", "mps")
 SECTIONS = ("demos", "policy", "training", "dagger", "evaluation")
 
 
-def _at_least_one(section: object, *names: str) -> None:
-    for name in names:
-        if getattr(section, name) < 1:
-            raise ConfigError(f"{name}={getattr(section, name)}: give at least 1")
-
-
 @dataclass(frozen=True)
-class DemoSettings:
-    """The expert's demos a baseline learns from (``colorsort-collect`` once per training variant, merged).
-
-    Attributes:
-        train_mix: (variant, weight) pairs: each demo count is split over the variants in proportion.
-        counts: increasing demo counts; the largest trains the shipped policy.
-        boxes_per_episode: boxes that leave the belt in one demo.
-        boxes_by_variant: (variant, boxes) pairs for training variants whose demos hold another number of boxes.
-        cameras: cameras recorded and read by the policy; () for a policy that reads the box state instead.
-        image_size: square camera images [px].
-        perturbations: the demonstrator's perturbations (``colorsort.data.perturbations``), each given to the
-            training variants it applies to.
-        turn_to_box: the expert turns the cup to a turned box; False: it keeps its home yaw.
-        expert: the expert's settings changed from its belt's preset, (name, value) pairs of ``ExpertConfig``
-            fields (``colorsort.expert.config.CHANGEABLE``), for the demos and DAgger's labels alike, e.g.
-            press:0.01,track_hold_time:0.15.
-        shift: held-out shifts' training ranges every demo is recorded with, drawn per episode
-            (``colorsort.shifts``), e.g. all:train; a held-out level (1-3) is refused, naming it.
-    """
-
-    train_mix: tuple[tuple[str, float], ...] = (("default", 1.0), ("jitter", 1.0), ("fast", 1.0),
-                                                ("distractors", 1.0))
-    counts: tuple[int, ...] = (8, 40, 200)
-    boxes_per_episode: int = 3
-    boxes_by_variant: tuple[tuple[str, int], ...] = ()
-    cameras: tuple[str, ...] = ()
-    image_size: int = 64
-    perturbations: tuple[Perturbation, ...] = ()
-    turn_to_box: bool = True
-    expert: tuple[tuple[str, float], ...] = ()
-    shift: str = ""
-
-    def __post_init__(self) -> None:
-        training_shifts(self.shift, "demos.shift")  # ConfigError naming a held-out level
-        for variant in self.train_variants:
-            get_variant(variant)  # ConfigError naming the valid variants
-        if not self.train_mix or any(w <= 0 for _, w in self.train_mix):
-            raise ConfigError(f"train_mix={self.train_mix}: give one or more variants, each a weight above 0")
-        if (not self.counts or list(self.counts) != sorted(set(self.counts))
-                or any(n < len(self.train_mix) for n in self.counts)):
-            raise ConfigError(f"counts={self.counts}: give increasing demo counts, each at least the number of "
-                              f"training variants ({len(self.train_mix)})")
-        for variant, boxes in self.boxes_by_variant:
-            get_variant(variant)
-            if boxes < 1:
-                raise ConfigError(f"boxes_by_variant has ({variant!r}, {boxes}): give at least 1 box")
-        _at_least_one(self, "boxes_per_episode", "image_size")
-        check_cameras(self.cameras)
-        for tracking in {get_variant(v).task_config.tracking for v in self.train_variants}:
-            changed(expert_preset(tracking), self.expert)  # ConfigError naming the valid settings
-        object.__setattr__(self, "perturbations", canonical(self.perturbations))
-        for p in self.perturbations:
-            if not self.applying(p):
-                raise ConfigError(f"{p.refusal(None)}; train_mix {list(self.train_variants)} has no variant it "
-                                  f"applies to")
-
-    @property
-    def train_variants(self) -> tuple[str, ...]:
-        return tuple(v for v, _ in self.train_mix)
-
-    def applying(self, p: Perturbation) -> tuple[str, ...]:
-        """The training variants perturbation ``p`` acts on."""
-        return tuple(v for v in self.train_variants
-                     if p.applies_to(get_variant(v), get_variant(v).task_config.tracking))
-
-    def perturbations_on(self, variant: str) -> tuple[Perturbation, ...]:
-        """The perturbations ``variant``'s demos are recorded with."""
-        return tuple(p for p in self.perturbations if variant in self.applying(p))
-
-    def split(self, n: int) -> dict[str, int]:
-        """``n`` demos over ``train_mix`` in proportion to the weights (largest remainders round up)."""
-        total = sum(w for _, w in self.train_mix)
-        exact = [n * w / total for _, w in self.train_mix]
-        counts = [int(x) for x in exact]
-        for k in sorted(range(len(exact)), key=lambda k: counts[k] - exact[k])[: n - sum(counts)]:
-            counts[k] += 1
-        return {v: c for v, c in zip(self.train_variants, counts, strict=True)}
-
-    def boxes(self, variant: str) -> int:
-        """Boxes in each demo of training variant ``variant``."""
-        return dict(self.boxes_by_variant).get(variant, self.boxes_per_episode)
-
-
-@dataclass(frozen=True)
-class TrainSettings:
+class TrainingConfig:
     """``lerobot-train``'s run: its length, seeds, batches, image augmentation and device.
 
     Attributes:
@@ -187,7 +95,7 @@ class TrainSettings:
     average: int = 1
 
     def __post_init__(self) -> None:
-        _at_least_one(self, "steps", "small_steps", "batch_size", "average")
+        at_least_one(self, "steps", "small_steps", "batch_size", "average")
         if self.average > 1 and not self.save_every:
             raise ConfigError(f"average={self.average} averages checkpoints saved along the run: give save_every "
                               "above 0 too (or average=1)")
@@ -230,7 +138,7 @@ class TrainSettings:
 
 
 @dataclass(frozen=True)
-class EvalSettings:
+class EvaluationConfig:
     """How the trained policies are scored (``colorsort-eval`` on each variant's fixed evaluation seeds).
 
     Attributes:
@@ -258,7 +166,7 @@ class EvalSettings:
             get_variant(name)
         if self.main_variant not in self.variants:
             raise ConfigError(f"main_variant={self.main_variant!r} must be one of variants {self.variants}")
-        _at_least_one(self, "episodes", "other_episodes", "curve_episodes")
+        at_least_one(self, "episodes", "other_episodes", "curve_episodes")
         if not 0 <= self.select_episodes <= len(VALIDATION_SEEDS):
             raise ConfigError(f"select_episodes={self.select_episodes}: give 0 (the last checkpoint) up to "
                               f"{len(VALIDATION_SEEDS)} (the validation seeds)")
@@ -274,11 +182,11 @@ class Recipe:
     """One learned baseline, from demos to scores: its preset's ``name`` and five sections."""
 
     name: str
-    demos: DemoSettings = field(default_factory=DemoSettings)
-    policy: PolicySettings = SMALL_ACT
-    training: TrainSettings = field(default_factory=TrainSettings)
-    evaluation: EvalSettings = field(default_factory=EvalSettings)
-    dagger: DaggerSettings = field(default_factory=DaggerSettings)
+    demos: DemosConfig = field(default_factory=DemosConfig)
+    policy: PolicyConfig = SMALL_ACT
+    training: TrainingConfig = field(default_factory=TrainingConfig)
+    evaluation: EvaluationConfig = field(default_factory=EvaluationConfig)
+    dagger: DaggerConfig = field(default_factory=DaggerConfig)
 
     def __post_init__(self) -> None:
         self._check_fit()
@@ -359,46 +267,46 @@ DR_SHIFTS = ",".join(f"{name}:train" for name in ("camera-pose", "robot-start", 
 
 RECIPES: dict[str, Recipe] = {r.name: r for r in (
     Recipe("state",
-           DemoSettings(train_mix=(("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)), counts=(40,),
+           DemosConfig(train_mix=(("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)), counts=(40,),
                         perturbations=(LatePass(100),)),
-           training=TrainSettings(steps=10000, save_every=2500, seeds=(1000, 1001, 1002))),
+           training=TrainingConfig(steps=10000, save_every=2500, seeds=(1000, 1001, 1002))),
     Recipe("state-tracking",
-           DemoSettings(train_mix=(("tracking", 1), ("tracking-jitter", 1)), counts=(40,), boxes_per_episode=5),
-           TRACKING_ACT, TrainSettings(steps=3000),
-           EvalSettings(main_variant="tracking", variants=TRACKING_VARIANTS)),
+           DemosConfig(train_mix=(("tracking", 1), ("tracking-jitter", 1)), counts=(40,), boxes_per_episode=5),
+           TRACKING_ACT, TrainingConfig(steps=3000),
+           EvaluationConfig(main_variant="tracking", variants=TRACKING_VARIANTS)),
     Recipe("camera",
-           DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("sensor", "wrist"), image_size=32,
+           DemosConfig(train_mix=CAMERA_MIX, counts=(48,), cameras=("sensor", "wrist"), image_size=32,
                         perturbations=(LatePass(100),)),
-           training=TrainSettings(steps=8000, save_every=2000, seeds=(1000, 1001, 1002), batch_size=32,
+           training=TrainingConfig(steps=8000, save_every=2000, seeds=(1000, 1001, 1002), batch_size=32,
                                   image_shift=0.1)),
     Recipe("camera-snapshot",
-           DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot",), image_size=32,
+           DemosConfig(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot",), image_size=32,
                         perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75))),
            replace(SMALL_ACT, optimizer_lr=3e-4, optimizer_lr_backbone=3e-4),
-           TrainSettings(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1),
-           EvalSettings(select_episodes=10)),
+           TrainingConfig(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1),
+           EvaluationConfig(select_episodes=10)),
     Recipe("camera-snapshot-dr",  # camera-snapshot's demos and training, the demos recorded with DR_SHIFTS
-           DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot",), image_size=32,
+           DemosConfig(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot",), image_size=32,
                         perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75)), shift=DR_SHIFTS),
            replace(SMALL_ACT, optimizer_lr=3e-4, optimizer_lr_backbone=3e-4),
-           TrainSettings(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1,
+           TrainingConfig(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1,
                          weights="float16"),
-           EvalSettings(select_episodes=10)),
+           EvaluationConfig(select_episodes=10)),
     Recipe("camera-tracking",
-           DemoSettings(train_mix=(("tracking", 1), ("tracking-jitter", 1)), counts=(48,), boxes_per_episode=5,
+           DemosConfig(train_mix=(("tracking", 1), ("tracking-jitter", 1)), counts=(48,), boxes_per_episode=5,
                         cameras=("sensor", "snapshot", "wrist"), image_size=64),
-           TRACKING_ACT, TrainSettings(steps=3600, save_every=1200, seeds=(1001, 1000, 1002), batch_size=32),
-           EvalSettings(main_variant="tracking", variants=TRACKING_VARIANTS, select_episodes=10)),
+           TRACKING_ACT, TrainingConfig(steps=3600, save_every=1200, seeds=(1001, 1000, 1002), batch_size=32),
+           EvaluationConfig(main_variant="tracking", variants=TRACKING_VARIANTS, select_episodes=10)),
     Recipe("camera-diffusion",
-           DemoSettings(train_mix=CAMERA_MIX, counts=(144,), cameras=("snapshot",), image_size=64,
+           DemosConfig(train_mix=CAMERA_MIX, counts=(144,), cameras=("snapshot",), image_size=64,
                         perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75))),
-           SNAPSHOT_DIFFUSION, TrainSettings(steps=4000, save_every=2000, seeds=(1001, 1000, 1002), batch_size=32,
+           SNAPSHOT_DIFFUSION, TrainingConfig(steps=4000, save_every=2000, seeds=(1001, 1000, 1002), batch_size=32,
                                              weights="float16"),
-           EvalSettings(select_episodes=20)),
+           EvaluationConfig(select_episodes=20)),
     Recipe("camera-large",
-           DemoSettings(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot", "wrist"), image_size=128,
+           DemosConfig(train_mix=CAMERA_MIX, counts=(48,), cameras=("snapshot", "wrist"), image_size=128,
                         perturbations=(LatePass(100),)),
-           LARGE_ACT, TrainSettings(steps=6000, save_every=1000, batch_size=32, image_shift=0.1, device="cuda")),
+           LARGE_ACT, TrainingConfig(steps=6000, save_every=1000, batch_size=32, image_shift=0.1, device="cuda")),
 )}
 
 

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from colorsort.benchmark.metrics import EvalReport, wilson_interval
-from colorsort.training.records import CurvePoint, ScoreRow
+from colorsort.training.results_file import CurvePoint, ScoreRow
 
 COLUMNS = ("variant", "policy", "demos", "training", "success rate (95% CI)", "correct", "misplaced", "dropped",
            "distractors let through", "boxes/min", "mean cycle [s]")

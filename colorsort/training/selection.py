@@ -17,9 +17,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training import stages
+from colorsort.training import pipeline_stages as stages
 from colorsort.training.recipes import Recipe
-from colorsort.training.records import ValidationPoint
+from colorsort.training.results_file import ValidationPoint
 from colorsort.variants import VALIDATION_SEEDS
 
 COUNTS = ("episodes", "successes", "correct", "misplaced", "dropped")

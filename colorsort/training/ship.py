@@ -15,10 +15,10 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 from colorsort.errors import ConfigError
-from colorsort.training.dagger_settings import DaggerSettings
+from colorsort.training.dagger_config import DaggerConfig
 from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
-from colorsort.training.records import Results, Sitting
 from colorsort.training.report import curve_table, plot_demos, summary_table, table, validation_table
+from colorsort.training.results_file import PipelineResults, Sitting
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
 
 
@@ -79,7 +79,7 @@ def dagger_line(recipe: Recipe, frames: int) -> str:
             f"training.")
 
 
-def ship(recipe: Recipe, model: Path, results: Results, plots: list[Path], dest: Path, command: str) -> None:
+def ship(recipe: Recipe, model: Path, results: PipelineResults, plots: list[Path], dest: Path, command: str) -> None:
     """Copy ``model`` to ``dest`` with ``scores.json`` (``results``), the plots and a README of how it was made."""
     dest.mkdir(parents=True, exist_ok=True)
     for f in model.iterdir():
@@ -111,18 +111,18 @@ def seedless(recipe: dict) -> dict:
 def with_defaults(recipe: dict) -> dict:
     """A stored recipe with the fields it predates at their defaults: a setting added since ran as its default
     does (``dagger.rollout``, for one). The policy section is the method's own and is left as stored."""
-    defaults = {**Recipe("defaults").to_json(), "dagger": json.loads(json.dumps(asdict(DaggerSettings())))}
+    defaults = {**Recipe("defaults").to_json(), "dagger": json.loads(json.dumps(asdict(DaggerConfig())))}
     return {**recipe, **{section: {**defaults[section], **stored} for section, stored in recipe.items()
                          if section in ("demos", "training", "dagger", "evaluation") and isinstance(stored, dict)}}
 
 
-def addable(recipe: Recipe, dest: Path) -> Results:
+def addable(recipe: Recipe, dest: Path) -> PipelineResults:
     """The scores shipped in ``dest``, when ``recipe`` differs from theirs only in training seeds none of theirs;
     ConfigError saying what differs otherwise."""
     path = dest / "scores.json"
     if not path.is_file():
         raise ConfigError(f"{dest} holds no shipped baseline (no scores.json): ship one there first with --ship")
-    shipped = Results.load(path)
+    shipped = PipelineResults.load(path)
     differ = differences(seedless(with_defaults(shipped.recipe)), seedless(with_defaults(recipe.to_json())))
     if differ:
         raise ConfigError(f"{dest}'s recipe differs from this run's in {differ}: seeds can be added only to a "
@@ -134,7 +134,7 @@ def addable(recipe: Recipe, dest: Path) -> Results:
     return shipped
 
 
-def add_seeds(recipe: Recipe, results: Results, dest: Path, command: str) -> Results:
+def add_seeds(recipe: Recipe, results: PipelineResults, dest: Path, command: str) -> PipelineResults:
     """Add ``results``' rows (training seeds run in a later sitting of ``recipe``) to the baseline shipped in
     ``dest``: its scores, its plot against demos and its README; its policy, curve and first command stay. The
     merged scores."""
@@ -152,7 +152,7 @@ def add_seeds(recipe: Recipe, results: Results, dest: Path, command: str) -> Res
     return merged
 
 
-def write_readme(recipe: Recipe, results: Results, dest: Path) -> None:
+def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     """``dest/README.md``: how the policy in ``dest`` was made and scored, from ``results`` (its rows' first
     training seed is the policy's)."""
     demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation

@@ -31,9 +31,9 @@ from pathlib import Path
 
 from colorsort.errors import ConfigError
 from colorsort.expert.config import changes_text
-from colorsort.training.methods import method_name
-from colorsort.training.records import Results, ScoreRow
+from colorsort.training.method_names import method_name
 from colorsort.training.report import curve_table, scored_checkpoints, span, summary_table
+from colorsort.training.results_file import PipelineResults, ScoreRow
 
 KINDS = ("table", "curve", "mistakes", "headline")
 BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)(<!-- end scores -->)", re.S)
@@ -42,7 +42,7 @@ BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)
 MACHINES = {"cpu": "on the CPU", "cuda": "on a GPU", "mps": "on Apple's GPU"}
 
 
-def label(scores: Results) -> str:
+def label(scores: PipelineResults) -> str:
     """The policy's label in a table ("ACT, sensor+wrist"), from the recipe stored with its scores.
 
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
@@ -54,18 +54,18 @@ def label(scores: Results) -> str:
     return f"{name}, {'+'.join(cameras) if cameras else 'state'}"
 
 
-def section(scores: Results, name: str) -> dict:
+def section(scores: PipelineResults, name: str) -> dict:
     """A section of the stored recipe ("training"); the whole recipe where it was stored flat (older scores)."""
     part = scores.recipe.get(name)
     return part if isinstance(part, dict) else scores.recipe
 
 
-def machine(scores: Results) -> str:
+def machine(scores: PipelineResults) -> str:
     """Where the policy trained ("on the CPU"), from its recipe's device."""
     return MACHINES[section(scores, "training").get("device", "cpu")]
 
 
-def main_variant(scores: Results) -> str:
+def main_variant(scores: PipelineResults) -> str:
     """The variant its learning curve was measured on, from its recipe."""
     return section(scores, "evaluation").get("main_variant", "default")
 
@@ -87,7 +87,7 @@ def millions(count: int | None) -> str:
     return "-" if count is None else f"{count / 1e6:.1f} M"
 
 
-def render(scores: Results, kind: str) -> str:
+def render(scores: PipelineResults, kind: str) -> str:
     """The Markdown ``kind`` table of a baseline's ``scores.json``."""
     if kind == "table":
         return summary_table(scores.rows, label(scores))
@@ -135,7 +135,7 @@ def headline(folder: Path, links_from: Path | None = None) -> str:
     lines = ["| baseline | method | inputs | parameters | training | success on each variant (one seed: 95% CI, "
              "episodes; several: mean and range over the seeds) |", "| --- | --- | --- | --- | --- | --- |"]
     for path in sorted(folder.glob("*/scores.json")):
-        scores = Results.load(path)
+        scores = PipelineResults.load(path)
         by_variant = largest_by_variant(scores.rows)
         cells = [variant_cell(v, g) for v, g in by_variant.items()]
         runs = next(iter(by_variant.values()))  # one row per training seed
@@ -167,7 +167,7 @@ def variant_cell(variant: str, rows: Sequence[ScoreRow]) -> str:
             f"({len(rows)} x {rows[0].report.episodes})")
 
 
-def commands(scores: Results) -> str:
+def commands(scores: PipelineResults) -> str:
     """The commands that made a baseline's scores: the first, then each that added training seeds."""
     return "; ".join([scores.command, *(f"{s.named_seeds()} added by {s.command}" for s in scores.added)])
 
@@ -184,7 +184,7 @@ def fill(text: str, root: Path, page: Path | None = None) -> str:
         path = root / m["dir"] / "scores.json"
         if not path.is_file():
             raise ConfigError(f"a scores block names {m['dir']}, which has no scores.json")
-        scores = Results.load(path)
+        scores = PipelineResults.load(path)
         note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/scores.json` ({commands(scores)}):"
         return f"{m[1]}{note}\n\n{render(scores, m['kind'])}\n\n{m[5]}"
 

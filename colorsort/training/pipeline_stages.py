@@ -38,8 +38,8 @@ from colorsort.data.config import CollectConfig
 from colorsort.errors import DataConflictError, StageError
 from colorsort.expert.config import changes_text
 from colorsort.training import cache
-from colorsort.training.partial_runs import first_updates, longer_run, resume_marker
 from colorsort.training.recipes import Recipe
+from colorsort.training.run_reuse import first_updates, longer_run, resume_marker
 from colorsort.training.weights import average, derived_copy, saved_every, store
 from colorsort.variants import get_variant
 from colorsort.versions import code_versions

@@ -5,7 +5,7 @@
 - ``ValidationPoint``: one checkpoint on the validation seeds of every training variant.
 - ``CurvePoint``: one checkpoint on the main variant's first evaluation seeds (the learning curve).
 - ``Sitting``: a later run that added training seeds to a shipped baseline (``colorsort-baseline --add-to``).
-- ``Results``: a run of the pipeline: the recipe (as JSON), the command, when, how long, its rows and curve, and
+- ``PipelineResults``: a run of the pipeline: the recipe (as JSON), the command, when, how long, its rows and curve, and
   the sittings that added seeds to it.
 
 Each record's ``to_json`` writes the flat objects ``scores.json`` has always held, and ``from_json`` reads them,
@@ -146,7 +146,7 @@ class Sitting:
 
 
 @dataclass(frozen=True)
-class Results:
+class PipelineResults:
     """One run of the pipeline (``results.json``; shipped as ``scores.json``), with the sittings that added
     training seeds to it (``added``: their rows are in ``rows``; the curve stays the first seed's)."""
 
@@ -174,12 +174,12 @@ class Results:
         return out
 
     @classmethod
-    def from_json(cls, data: dict) -> Results:
+    def from_json(cls, data: dict) -> PipelineResults:
         return cls(data["recipe"], data["command"], data["started"], data["wall_s"],
                    tuple(ScoreRow.from_json(r) for r in data["rows"]),
                    tuple(CurvePoint.from_json(p) for p in data.get("curve") or ()), data.get("commit", ""),
                    tuple(Sitting.from_json(s) for s in data.get("added", ())))
 
     @classmethod
-    def load(cls, path: Path) -> Results:
+    def load(cls, path: Path) -> PipelineResults:
         return cls.from_json(json.loads(path.read_text()))

@@ -2,7 +2,7 @@
 
 Both kinds answer the same questions, so the pipeline never asks which one it holds:
 
-- ``type``: ``lerobot-train --policy.type`` (its name in tables: ``colorsort.training.methods``);
+- ``type``: ``lerobot-train --policy.type`` (its name in tables: ``colorsort.training.method_names``);
 - ``args(image_size)``: the ``--policy.<name>=<value>`` arguments (and any optimizer ones);
 - ``inference()``: the settings that change how a trained policy acts but not what it learns;
 - ``execution``: how its action chunks are executed, for file names (``chunk10``, ``ens0.01``);
@@ -33,7 +33,7 @@ def _text(value: object) -> str:
 
 
 @dataclass(frozen=True)
-class ActSettings:
+class ActConfig:
     """LeRobot ACT settings, passed to ``lerobot-train`` as ``--policy.<name>=<value>``."""
 
     dim_model: int = 128
@@ -102,7 +102,7 @@ class ActSettings:
 
 
 @dataclass(frozen=True)
-class DiffusionSettings:
+class DiffusionConfig:
     """LeRobot diffusion policy settings for small images trained from scratch on a CPU.
 
     Its image encoder is what ACT's is not: a ResNet-18 whose batch norms become GroupNorm (a working
@@ -192,17 +192,17 @@ class DiffusionSettings:
                 f"keypoints, random crops of {self.crop_fraction:g} of each side)")
 
 
-PolicySettings = ActSettings | DiffusionSettings
+PolicyConfig = ActConfig | DiffusionConfig
 
-SMALL_ACT = ActSettings()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
+SMALL_ACT = ActConfig()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
 # the belt that never stops: each step's action the average of every chunk's prediction for it, the k-th weighted
 # exp(-0.2 k) so that the plan made first counts most (why 0.2: docs/baselines.md, "How ACT acts")
-TRACKING_ACT = ActSettings(n_action_steps=1, temporal_ensemble_coeff=0.2)
-LARGE_ACT = ActSettings(dim_model=512, dim_feedforward=3200, n_heads=8, n_encoder_layers=4)  # LeRobot's own size
+TRACKING_ACT = ActConfig(n_action_steps=1, temporal_ensemble_coeff=0.2)
+LARGE_ACT = ActConfig(dim_model=512, dim_feedforward=3200, n_heads=8, n_encoder_layers=4)  # LeRobot's own size
 # what learned within the hour here (one 64 px camera): the U-Net predicts the clean actions, which it learns as a
 # regression first, where the noise it predicted before had not been learned after 4,500 updates; DDIM takes that
 # noise away in 10 deterministic steps; 3e-4, as ACT; and two levels of 64 and 128 channels (a 1.37 M U-Net, 12.56 M
 # in all), where 32 and 64 sorted 32% of `default` and 64, 128, 256 52% (docs/baselines.md, "Other LeRobot policies:
 # diffusion")
-SNAPSHOT_DIFFUSION = DiffusionSettings(down_dims=(64, 128), prediction_type="sample", noise_scheduler_type="DDIM",
+SNAPSHOT_DIFFUSION = DiffusionConfig(down_dims=(64, 128), prediction_type="sample", noise_scheduler_type="DDIM",
                                        optimizer_lr=3e-4, scheduler_warmup_steps=200)

@@ -12,7 +12,7 @@ RETRAINS = ("scratch", "finetune")
 
 
 @dataclass(frozen=True)
-class DaggerSettings:
+class DaggerConfig:
     """DAgger (Ross et al., 2011) after behaviour cloning: rounds of "the policy drives, the expert labels the
     states it reached, the labels join the training set, the policy is trained again" (``colorsort-takeover``
     records a round's labels). Each round trains a new policy from scratch on the demos and every round's labels,
