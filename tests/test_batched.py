@@ -304,21 +304,22 @@ def test_other_belts_and_robots_run_on_the_batched_cell(variant):
 def test_the_episodes_kept_wave_by_wave_hold_every_film_the_report_chooses(limit):
     """``films.wanted`` keeps, wave by wave, what ``choose_films`` would choose from every episode at the end."""
     from colorsort.batched.films import wanted
+    from colorsort.benchmark.episode_result import EpisodeResult
     from colorsort.benchmark.metrics import aggregate
     from colorsort.benchmark.report_page import choose_films
 
     rng = np.random.default_rng(0)
     for _ in range(20):
-        episodes = [{"seed": 100 + i, "success": bool(rng.random() < 0.6), "ended": "x", "steps": 1, "correct": 0,
-                     "misplaced": 0, "dropped": 0, "let_through": 0, "distractors": 0, "sim_time": 1.0,
-                     "sorted_times": [], "boxes": []} for i in range(int(rng.integers(1, 15)))]
+        episodes = [EpisodeResult(seed=100 + i, success=bool(rng.random() < 0.6), ended="x", steps=1, correct=0,
+                                  misplaced=0, dropped=0, let_through=0, distractors=0, sim_time=1.0,
+                                  sorted_times=[], boxes=[]) for i in range(int(rng.integers(1, 15)))]
         kept, have = set(), (0, 0)
         for first in range(0, len(episodes), 4):  # waves of 4 worlds
             wave = episodes[first : first + 4]
             chosen, have = wanted(wave, limit, have)
-            kept |= {wave[i]["seed"] for i in chosen}
+            kept |= {wave[i].seed for i in chosen}
         report = aggregate("p", "default", episodes)
-        everything = choose_films([report], {("default", e["seed"]): e["seed"] for e in episodes}, limit)
+        everything = choose_films([report], {("default", e.seed): e.seed for e in episodes}, limit)
         assert set(everything.values()) <= kept
 
 

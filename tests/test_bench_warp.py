@@ -44,9 +44,10 @@ def cpu_row(policy: str, variant: str) -> dict:
 
 def as_run(row: dict, policy: str, episodes: list[dict]) -> dict:
     """A batched run's record (``bench_warp_scores.evaluate``'s) with these episodes."""
+    from colorsort.benchmark.episode_result import EpisodeResult
     from colorsort.benchmark.metrics import aggregate
 
-    r = aggregate(policy, row["variant"], [{**e, "sorted_times": []} for e in episodes])
+    r = aggregate(policy, row["variant"], [EpisodeResult(**{**e, "sorted_times": []}) for e in episodes])
     return {"policy": policy, "variant": row["variant"], "device": "cpu", "envs": 4, "episodes": r.episodes,
             "successes": r.successes, "success_ci95": list(r.success_ci95), "correct": r.correct,
             "misplaced": r.misplaced, "dropped": r.dropped, "seconds": 1.0, "control_steps": 10,

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 from helpers import console_script
 
+from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.evaluate import run_evaluation
 from colorsort.benchmark.metrics import aggregate
 from colorsort.benchmark.report_page import SUCCESSES_FILMED, choose_films
@@ -59,9 +60,8 @@ def test_filming_changes_no_result_and_films_every_step(policy, tmp_path):
 
 
 def test_the_report_keeps_every_failure_first_and_a_few_successes():
-    results = [{"seed": s, "success": s % 3 == 0, "ended": "x", "steps": 1, "correct": 0, "misplaced": 0,
-                "dropped": 0, "let_through": 0, "distractors": 0, "sim_time": 1.0, "sorted_times": [], "boxes": []}
-               for s in range(10)]
+    results = [EpisodeResult(seed=s, success=s % 3 == 0, ended="x", steps=1, correct=0, misplaced=0, dropped=0,
+                             let_through=0, distractors=0, sim_time=1.0, sorted_times=[], boxes=[]) for s in range(10)]
     report = aggregate("p", "default", results)
     films = {("default", s): bytes([s]) for s in range(10)}
     failures = [s for s in range(10) if s % 3]

@@ -30,11 +30,12 @@ from colorsort.batched.films import Filming, FilmViewer, WaveRecording
 from colorsort.batched.kernels import OUTCOMES
 from colorsort.batched.schedule import COLOR_NAMES
 from colorsort.batched.spec import CellSpec, spec_for_variant
+from colorsort.benchmark.episode_result import EpisodeResult, box_record
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras
 from colorsort.benchmark.report_page import choose_films
-from colorsort.cell.referee import Outcome
-from colorsort.config import BIN_COLORS, is_distractor
+from colorsort.cell.referee import BoxEvent, Outcome
+from colorsort.config import BIN_COLORS
 from colorsort.errors import ConfigError
 from colorsort.variants import Variant, get_variant
 
@@ -123,39 +124,27 @@ def tally(n_events: np.ndarray, outcome: np.ndarray, boxes: int) -> dict[str, np
     return {"done": done, "success": done & ~failed, "failed": failed, **{o.value: c for o, c in count.items()}}
 
 
-def episode_result(record: Record, world: int, variant: Variant, steps: int, sim_time: float) -> dict:
-    """World ``world``'s episode as ``EpisodeRunner.episode`` reports it (``boxes``: the first ``variant.boxes``)."""
-    events = record.events(world)[: variant.boxes]
-    outcomes = [OUTCOMES[o] for _, _, _, o, _ in events]
-    wrong = [o for o in outcomes if not o.handled_right]
-    done = len(events) >= variant.boxes
-    success = done and not wrong
-    ended = "success" if success else "failed" if wrong else "time limit"
+def episode_result(record: Record, world: int, variant: Variant, steps: int, sim_time: float) -> EpisodeResult:
+    """World ``world``'s episode, judged as the CPU cell's (``EpisodeResult.judged``)."""
     grips, offsets, yaws = record.grips[world], record.offset[world], record.yaw[world]
-    boxes = []
-    for t, serial, color, outcome, b in events:
+    events, boxes = [], []
+    for t, serial, color, outcome, b in record.events(world):
+        event = BoxEvent(t, serial, COLOR_NAMES[color], OUTCOMES[outcome], BIN_COLORS[b] if b >= 0 else None)
         grip = grips[serial] if serial < len(grips) else (math.nan, math.nan)
-        boxes.append({"time": t, "color": COLOR_NAMES[color], "outcome": OUTCOMES[outcome].value,
-                      "bin": BIN_COLORS[b] if b >= 0 else None, "offset": round(float(offsets[serial]), 4),
-                      "yaw": round(float(np.rad2deg(yaws[serial])), 2),
-                      "grip_offset": None if math.isnan(grip[0]) else round(float(grip[0]), 4),
-                      "grip_yaw": None if math.isnan(grip[1]) else round(float(grip[1]), 2)})
-    count = {o: sum(x is o for x in outcomes) for o in Outcome}
-    return {"seed": int(record.seeds[world]), "success": success, "ended": ended, "steps": steps,
-            "correct": count[Outcome.PLACED], "misplaced": count[Outcome.MISPLACED],
-            "dropped": count[Outcome.DROPPED], "let_through": count[Outcome.REJECTED],
-            "distractors": sum(is_distractor(COLOR_NAMES[c]) for _, _, c, _, _ in events), "sim_time": sim_time,
-            "sorted_times": [t for (t, *_), o in zip(events, outcomes, strict=True) if o.handled_right],
-            "boxes": boxes}
+        events.append(event)
+        boxes.append(box_record(event, float(offsets[serial]), float(np.rad2deg(yaws[serial])),
+                                None if math.isnan(grip[0]) else float(grip[0]),
+                                None if math.isnan(grip[1]) else float(grip[1])))
+    return EpisodeResult.judged(int(record.seeds[world]), steps, sim_time, events, variant.boxes, boxes)
 
 
 def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
-              progress: bool = True, filming: Filming | None = None) -> tuple[list[dict], WaveTiming]:
+              progress: bool = True, filming: Filming | None = None) -> tuple[list[EpisodeResult], WaveTiming]:
     """Every seed's episode, in waves of ``cell.worlds``; results in seed order. With ``filming``, each wave is
     recorded and the episodes its report may film kept (``films.py``)."""
     n = cell.worlds
     task = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours."
-    results: list[dict] = []
+    results: list[EpisodeResult] = []
     bar = tqdm(total=len(seeds), desc=f"{policy.name} on {variant.name} (warp)", unit="episode", disable=not progress)
     start, control_steps = time.perf_counter(), 0
     for first in range(0, len(seeds), n):
@@ -168,7 +157,7 @@ def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds:
         policy.reset(int(wave[0]))
         ended = np.zeros(n, bool)
         ended[len(wave):] = True
-        finished: dict[int, dict] = {}
+        finished: dict[int, EpisodeResult] = {}
         for step in range(1, max_steps + 1):
             out = cell.step(policy.act(out, task))
             control_steps += 1
@@ -194,7 +183,7 @@ def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds:
 
 
 def run_rolling(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
-                period: int, progress: bool = True) -> tuple[list[dict], WaveTiming]:
+                period: int, progress: bool = True) -> tuple[list[EpisodeResult], WaveTiming]:
     """Every seed's episode, ``cell.worlds`` at a time; a world whose episode ended starts the next seed at the
     policy's next restart point (every ``period`` control steps, ``restart_period``) while the others run on.
     Results in seed order, each as the episode would be on its own: it starts at a restart point, where the
@@ -208,7 +197,7 @@ def run_rolling(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seed
     start = np.zeros(n, int)  # the control step its episode began at
     active = episode < len(first)
     upcoming = len(first)
-    results: dict[int, dict] = {}
+    results: dict[int, EpisodeResult] = {}
     bar = tqdm(total=len(seeds), desc=f"{policy.name} on {variant.name} (warp)", unit="episode", disable=not progress)
     begin, t = time.perf_counter(), 0
     while active.any() or upcoming < len(seeds):

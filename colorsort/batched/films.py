@@ -25,6 +25,7 @@ from colorsort.batched.cell import BatchedCell
 from colorsort.batched.kernels import IN_BIN, IN_PLAY
 from colorsort.batched.schedule import COLOR_NAMES, episode_draws
 from colorsort.batched.spec import CellSpec
+from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.filming import FILM_CAMERA, FILM_SIZE, overlay_text
 from colorsort.benchmark.report_page import SUCCESSES_FILMED
 from colorsort.cell.lighting import LightRig
@@ -65,21 +66,21 @@ class WaveRecording:
         self.frames.append((wp.to_torch(c.d.qpos).clone(), small(c.status), small(c.color), small(c.serial),
                             small(c.bin_of), wp.to_torch(c.detected).to(torch.bool)))
 
-    def keep(self, worlds: list[int], results: list[dict]) -> list[WorldTrack]:
+    def keep(self, worlds: list[int], results: list[EpisodeResult]) -> list[WorldTrack]:
         """The tracks of ``worlds``, world ``worlds[i]`` up to the last step of its episode ``results[i]``
-        (``evaluate.episode_result``'s dict, whose boxes give the events)."""
+        (``evaluate.episode_result``'s, whose boxes give the events)."""
         index = torch.as_tensor(worlds, dtype=torch.long, device=self.frames[0][0].device)
         rows = [torch.stack([f[k][index] for f in self.frames]).cpu().numpy() for k in range(6)]  # (T, worlds, ...)
         tracks = []
         for i, result in enumerate(results):
-            end = result["steps"] + 1
-            events = [(b["time"], b["color"], Outcome(b["outcome"]), b["bin"]) for b in result["boxes"]]
+            end = result.steps + 1
+            events = [(b["time"], b["color"], Outcome(b["outcome"]), b["bin"]) for b in result.boxes]
             qpos, *per_box = (r[:end, i] for r in rows)
-            tracks.append(WorldTrack(result["seed"], events, qpos.astype(np.float64), *per_box))
+            tracks.append(WorldTrack(result.seed, events, qpos.astype(np.float64), *per_box))
         return tracks
 
 
-def wanted(results: list[dict], limit: int | None, have: tuple[int, int]) -> tuple[list[int], tuple[int, int]]:
+def wanted(results: list[EpisodeResult], limit: int | None, have: tuple[int, int]) -> tuple[list[int], tuple[int, int]]:
     """Which of a wave's episode results (seed order) a report may still keep, given the failures and successes
     kept from earlier waves (``have``), and the counts with them: ``choose_films``'s order, failures first,
     successes by seed."""
@@ -87,10 +88,10 @@ def wanted(results: list[dict], limit: int | None, have: tuple[int, int]) -> tup
     keep_successes = SUCCESSES_FILMED if limit is None else limit
     chosen = []
     for i, r in enumerate(results):
-        if not r["success"] and (limit is None or failures < limit):
+        if not r.success and (limit is None or failures < limit):
             chosen.append(i)
             failures += 1
-        elif r["success"] and successes < keep_successes:
+        elif r.success and successes < keep_successes:
             chosen.append(i)
             successes += 1
     return chosen, (failures, successes)
@@ -165,7 +166,7 @@ class Filming:
         self.tracks: dict[int, WorldTrack] = {}  # seed -> track
         self.kept = (0, 0)  # failures, successes
 
-    def wave_ended(self, recording: WaveRecording, results: list[dict]) -> None:
+    def wave_ended(self, recording: WaveRecording, results: list[EpisodeResult]) -> None:
         """Keep what the report may want of a wave whose worlds ``0..len(results)-1`` ran ``results``."""
         chosen, self.kept = wanted(results, self.limit, self.kept)
         if chosen:

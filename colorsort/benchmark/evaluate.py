@@ -14,12 +14,14 @@ from typing import Any
 
 from tqdm import tqdm
 
+from colorsort.benchmark.episode_result import EpisodeResult, box_record
 from colorsort.benchmark.filming import EpisodeFilm
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.cell.plant import Grip
+from colorsort.cell.rollout import GymEpisode, Observer, rollout
 from colorsort.errors import ConfigError, StageError
 from colorsort.executors.base import (
     DEFAULT_SHARD_SIZE,
@@ -55,7 +57,7 @@ class EvalConfig:
     image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE  # (height, width) [px]
     cameras: tuple[str, ...] = DEFAULT_CAMERAS
     episode_length: int | None = None  # steps before truncation; None: the variant's time limit
-    film: bool = False  # film every episode (``filming.py``): its mp4 bytes under "video" in its result
+    film: bool = False  # film every episode (``filming.py``): its mp4 bytes in its result's ``video``
     shift: tuple[str, ...] = ()  # held-out shifts, ``NAME:LEVEL`` (``colorsort.shifts``); the env applies them
 
 
@@ -89,46 +91,47 @@ class EpisodeRunner:
 
             torch.set_num_threads(self.threads_before)
 
-    def episode(self, seed: int) -> dict:
+    def episode(self, seed: int) -> EpisodeResult:
         """Run the episode of ``seed``: its figures, how it ended, each box's outcome (and its film)."""
-        obs, info = self.env.reset(seed=seed)
+        obs, _ = self.env.reset(seed=seed)
         self.policy.reset(self.env, seed)
         film = EpisodeFilm(self.env) if self.film else None
+        observers = [Filming(film, self.policy)] if film is not None else []
         try:
-            terminated = truncated = False
-            while True:
-                if film is not None:  # the reset, then every step
-                    film.add(getattr(self.policy, "phase", None))
-                if terminated or truncated:
-                    break
-                obs, _, terminated, truncated, info = self.env.step(self.policy.act(obs))
+            info = rollout(GymEpisode(self.env), obs, self.policy.act, observers).info
         except BaseException:
             if film is not None:
                 film.discard()
             raise
-        ended = "success" if info["is_success"] else "failed" if info["failed"] else "time limit"
-        placed = {p.serial: p for p in self.env.env.placements}
-        gripped = {g.serial: g for g in self.env.env.grips}  # a box sealed twice: the last seal
-        boxes = [{"time": e.time, "color": e.color, "outcome": e.outcome.value, "bin": e.bin,
-                  "offset": round(placed[e.serial].offset, 4), "yaw": round(placed[e.serial].yaw, 2),
-                  **grip_fields(gripped.get(e.serial))}
-                 for e in self.env.env.events[: self.env.variant.boxes]]
-        result = {"seed": seed, "success": bool(info["is_success"]), "ended": ended, "steps": self.env.steps,
-                  **{k: info[k] for k in ("correct", "misplaced", "dropped", "let_through", "distractors", "sim_time",
-                                          "sorted_times")}, "boxes": boxes}
-        if self.env.env.shifts.record:
-            result["shift"] = self.env.env.shifts.record  # each shift's level and the values drawn for this episode
+        env = self.env.env
+        placed = {p.serial: p for p in env.placements}
+        gripped = {g.serial: g for g in env.grips}  # a box sealed twice: the last seal
+        boxes = [box_record(e, placed[e.serial].offset, placed[e.serial].yaw, *grip_fields(gripped.get(e.serial)))
+                 for e in env.events[: self.env.variant.boxes]]
+        result = EpisodeResult.judged(seed, self.env.steps, info["sim_time"], env.events, self.env.variant.boxes,
+                                      boxes, env.shifts.record)  # each shift's level and its draws this episode
         if film is not None:
-            result["video"] = film.finish()
+            result.video = film.finish()
         return result
 
 
-def grip_fields(grip: Grip | None) -> dict:
-    """A box's record of how the cup held it: ``grip_offset`` [m] off the cup's axis and ``grip_yaw`` [deg]
-    against the cup (None for a box never sealed)."""
-    if grip is None:
-        return {"grip_offset": None, "grip_yaw": None}
-    return {"grip_offset": round(grip.offset, 4), "grip_yaw": round(grip.yaw, 2)}
+class Filming(Observer):
+    """Films an episode: its reset, then every step, with the policy's phase where it has one."""
+
+    def __init__(self, film: EpisodeFilm, policy: Any):
+        self.film, self.policy = film, policy
+
+    def on_start(self, obs: Any) -> None:
+        self.film.add(getattr(self.policy, "phase", None))
+
+    def on_step(self, obs: Any, info: dict) -> None:
+        self.film.add(getattr(self.policy, "phase", None))
+
+
+def grip_fields(grip: Grip | None) -> tuple[float | None, float | None]:
+    """How the cup held a box: ``grip.offset`` [m] off the cup's axis and ``grip.yaw`` [deg] against the cup
+    (None, None for a box never sealed)."""
+    return (None, None) if grip is None else (grip.offset, grip.yaw)
 
 
 PRELOAD = ("colorsort.benchmark.evaluate",)  # what worker processes import once, before they fork
@@ -146,7 +149,7 @@ class _Stopped(Exception):
     """The evaluation was asked to stop."""
 
 
-def run_job(job: EvalJob, ctx: TaskContext) -> list[dict]:
+def run_job(job: EvalJob, ctx: TaskContext) -> list[EpisodeResult]:
     """The task: one env and one policy, the job's episodes in seed order; one message per episode."""
     runner = EpisodeRunner(job.settings)
     results = []
@@ -162,7 +165,7 @@ def run_job(job: EvalJob, ctx: TaskContext) -> list[dict]:
 
 
 def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(), progress: bool = True,
-                 desc: str = "evaluating") -> tuple[list[list[dict]], int]:
+                 desc: str = "evaluating") -> tuple[list[list[EpisodeResult]], int]:
     """Run every job on ``executor``; returns each job's episode results (in seed order) and how many
     jobs ran again because their process died.
 
@@ -227,8 +230,8 @@ def run_evaluation(policy_spec: str, variant_names: list[str], episodes: int, *,
             jobs.append(EvalJob(settings, tuple(block)))
             owner.append(k)
     results, _ = run_episodes(jobs, executor, progress, desc=f"{policy_spec} on {', '.join(variant_names)}")
-    films = {(job.settings.variant, r["seed"]): r.pop("video") for job, rs in zip(jobs, results, strict=True)
-             for r in rs if "video" in r}
+    films = {(job.settings.variant, r.seed): r.video for job, rs in zip(jobs, results, strict=True)
+             for r in rs if r.video is not None}
     per = [[r for job, rs in zip(owner, results, strict=True) if job == k for r in rs] for k in range(len(variants))]
     label = shift_label(parse_shifts(shift))
     reports = [aggregate(str(policy_spec), v.name, rs, label) for v, rs in zip(variants, per, strict=True)]

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from colorsort.benchmark.episode_result import EpisodeResult
+
 
 @dataclass
 class EvalReport:
@@ -45,21 +47,21 @@ def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, flo
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-def aggregate(policy: str, variant: str, results: list[dict], shift: str = "none") -> EvalReport:
-    """The report over per-episode results (``evaluate``'s per-episode dicts, in seed order)."""
-    report = EvalReport(policy=policy, variant=variant, seeds=[r["seed"] for r in results], shift=shift)
+def aggregate(policy: str, variant: str, results: list[EpisodeResult], shift: str = "none") -> EvalReport:
+    """The report over per-episode results (in seed order)."""
+    report = EvalReport(policy=policy, variant=variant, seeds=[r.seed for r in results], shift=shift)
     cycles: list[float] = []
     handled = 0
     for r in results:
         report.episodes += 1
-        report.successes += int(r["success"])
+        report.successes += int(r.success)
         for key in ("correct", "misplaced", "dropped", "distractors"):
-            setattr(report, key, getattr(report, key) + r[key])
-        report.distractors_let_through += r["let_through"]
-        report.sim_time_s += r["sim_time"]
-        handled += len(r["sorted_times"])
-        cycles += list(np.diff(r["sorted_times"]))
-        report.per_episode.append({k: v for k, v in r.items() if k != "sorted_times"})
+            setattr(report, key, getattr(report, key) + getattr(r, key))
+        report.distractors_let_through += r.let_through
+        report.sim_time_s += r.sim_time
+        handled += len(r.sorted_times)
+        cycles += list(np.diff(r.sorted_times))
+        report.per_episode.append(r.to_json())
     report.success_rate = report.successes / report.episodes
     report.success_ci95 = wilson_interval(report.successes, report.episodes)
     report.boxes_per_minute = 60.0 * handled / report.sim_time_s if report.sim_time_s > 0 else 0.0

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.evaluate import EpisodeRunner, EvalConfig, run_jobs
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec
@@ -70,7 +71,7 @@ class SweepJob:
         return f"{self.settings.variant}:sweep:{self.episodes[0][0]}:{self.episodes[0][2]}"
 
 
-def run_sweep_job(job: SweepJob, ctx: TaskContext) -> list[tuple[int, dict]]:
+def run_sweep_job(job: SweepJob, ctx: TaskContext) -> list[tuple[int, EpisodeResult]]:
     """The task: one env and one policy, the job's episodes in order, the env's shifts switched between arms."""
     runner = EpisodeRunner(job.settings)
     results = []
@@ -100,7 +101,7 @@ def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[i
     jobs = [SweepJob(settings, tuple(block)) for block in chunks(episodes, shard_size, executor.workers)]
     results = run_jobs([(job.key, run_sweep_job, job) for job in jobs], len(episodes), executor, progress,
                        desc=f"{policy} on {variant}: {len(arms)} arms")
-    per: list[list[dict]] = [[] for _ in arms]
+    per: list[list[EpisodeResult]] = [[] for _ in arms]
     for arm, result in (pair for job_results in results for pair in job_results):
         per[arm].append(result)
     return [aggregate(policy, variant, rs, shift_label(parse_shifts(() if a.shift == CONTROL else (a.shift,))))

@@ -7,6 +7,7 @@ sheet beside it.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -16,6 +17,7 @@ from tqdm import tqdm
 
 from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
+from colorsort.cell.rollout import CellEpisode, Observer, Step, rollout
 from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sorting_time_limit
 from colorsort.data.video import VideoWriter, contact_sheet, draw_lines, save_png
 from colorsort.errors import ConfigError
@@ -81,6 +83,58 @@ class SortReport:
         return asdict(self)
 
 
+class SortLog(Observer):
+    """``colorsort-sort``'s observer: the time in each of the expert's phases, the belt's stops, the arm's peak
+    speed, one line per box that left the belt (``log``), and the filmed overlay."""
+
+    def __init__(self, env: ColorSort, expert: Expert, vmax: np.ndarray, writer: VideoWriter | None,
+                 log: Callable[[str], None]):
+        self.env, self.expert, self.vmax, self.writer, self.log = env, expert, vmax, writer, log
+        self.report = SortReport()
+        self.handled: dict[int, int] = {}  # box serial -> index of the expert's cycle
+        self.reported = 0
+        self.thumbs: list[np.ndarray] = []
+        self.on_box: Callable[[], None] = lambda: None
+        self._cycles_before = 0
+
+    def on_observe(self, obs: dict) -> None:
+        self._cycles_before = len(self.expert.cycles)
+
+    def on_action(self, obs: dict, step: Step) -> None:
+        expert, env = self.expert, self.env
+        if len(expert.cycles) > self._cycles_before:  # the expert looked at a new box: which was it?
+            box = _box_at_sensor(env)
+            if box is not None:
+                self.handled[box] = len(expert.cycles) - 1
+        phase = expert.phase.value
+        self.report.phase_seconds[phase] = self.report.phase_seconds.get(phase, 0.0) + env.control_timestep
+
+    def on_step(self, obs: dict, info: dict) -> None:
+        env, report = self.env, self.report
+        report.belt_stopped_s += 0.0 if info["belt_running"] else env.control_timestep
+        speed = float(np.max(np.abs(obs["robot0_joint_vel"]) / self.vmax))
+        report.peak_speed_ratio = max(report.peak_speed_ratio, speed)
+        if self.writer is not None:
+            frame = _overlay(obs["scene_image"], self.expert, env)
+            self.writer.write(frame)
+            if env.timestep % 4 == 1:
+                h, w = frame.shape[:2]
+                self.thumbs.append(cv2.resize(frame, (SHEET_TILE_WIDTH, h * SHEET_TILE_WIDTH // w),
+                                              interpolation=cv2.INTER_AREA))
+        for event in env.events[self.reported:]:
+            cycle = self.expert.cycles[self.handled[event.serial]] if event.serial in self.handled else None
+            cycle_time = None if cycle is None else event.time - cycle.detected_at
+            entry = BoxReport(event.color, cycle.seen_color if cycle else None, event.bin, cycle_time)
+            report.boxes.append(entry)
+            setattr(report, _counter(event.outcome), getattr(report, _counter(event.outcome)) + 1)
+            n = len(report.boxes)
+            took = f"{cycle_time:5.2f} s" if cycle_time is not None else "    -  "
+            self.log(f"box {n:3d}: seen {str(entry.seen_color):8s} true {entry.true_color:7s} "
+                     f"-> {str(entry.bin) + ' bin' if entry.bin else event.outcome:10s} cycle {took}")
+            self.on_box()
+        self.reported = len(env.events)
+
+
 def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport:
     """Run the expert as ``config`` says and return the report; ``log`` gets one line per box."""
     task = make_config(config.preset)
@@ -92,52 +146,19 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
     expert = make_expert(env)
     expert.reset(obs)
     writer = VideoWriter(config.video, fps=env.control_freq) if config.video else None
-    report = SortReport()
-    vmax = np.array(get_robot(config.robot).joint_speeds)
-    handled: dict[int, int] = {}  # box serial -> index of the expert's cycle
-    reported = 0
-    thumbs: list[np.ndarray] = []
+    sort_log = SortLog(env, expert, np.array(get_robot(config.robot).joint_speeds), writer, log)
     bar = tqdm(total=config.boxes, unit="box", disable=not progress, desc="sorting")
+    sort_log.on_box = lambda: bar.update(1)
     try:
-        while len(env.events) < config.boxes and env.cur_time < limit:
-            cycles_before = len(expert.cycles)
-            action = expert.act(obs)
-            if len(expert.cycles) > cycles_before:  # the expert looked at a new box: which was it?
-                box = _box_at_sensor(env)
-                if box is not None:
-                    handled[box] = len(expert.cycles) - 1
-            phase = expert.phase.value
-            report.phase_seconds[phase] = report.phase_seconds.get(phase, 0.0) + env.control_timestep
-            obs, _, _, info = env.step(action)
-            report.belt_stopped_s += 0.0 if info["belt_running"] else env.control_timestep
-            speed = float(np.max(np.abs(obs["robot0_joint_vel"]) / vmax))
-            report.peak_speed_ratio = max(report.peak_speed_ratio, speed)
-            if writer is not None:
-                frame = _overlay(obs["scene_image"], expert, env)
-                writer.write(frame)
-                if env.timestep % 4 == 1:
-                    h, w = frame.shape[:2]
-                    thumbs.append(cv2.resize(frame, (SHEET_TILE_WIDTH, h * SHEET_TILE_WIDTH // w),
-                                             interpolation=cv2.INTER_AREA))
-            for event in env.events[reported:]:
-                cycle = expert.cycles[handled[event.serial]] if event.serial in handled else None
-                cycle_time = None if cycle is None else event.time - cycle.detected_at
-                entry = BoxReport(event.color, cycle.seen_color if cycle else None, event.bin, cycle_time)
-                report.boxes.append(entry)
-                setattr(report, _counter(event.outcome), getattr(report, _counter(event.outcome)) + 1)
-                n = len(report.boxes)
-                took = f"{cycle_time:5.2f} s" if cycle_time is not None else "    -  "
-                log(f"box {n:3d}: seen {str(entry.seen_color):8s} true {entry.true_color:7s} "
-                    f"-> {str(entry.bin) + ' bin' if entry.bin else event.outcome:10s} cycle {took}")
-                bar.update(1)
-            reported = len(env.events)
+        rollout(CellEpisode(env, config.boxes, limit), obs, expert.act, [sort_log])
     finally:
         bar.close()
         if writer is not None:
             writer.close()
-            if thumbs and config.video:
-                save_png(Path(config.video).with_suffix(".png"), contact_sheet(thumbs))
+            if sort_log.thumbs and config.video:
+                save_png(Path(config.video).with_suffix(".png"), contact_sheet(sort_log.thumbs))
         env.close()
+    report = sort_log.report
     report.let_go = getattr(expert, "let_go", 0)
     report.sim_time_s = env.events[-1].time if len(env.events) >= config.boxes else env.cur_time
     report.boxes_per_minute = 60.0 * len(report.boxes) / report.sim_time_s if report.sim_time_s > 0 else 0.0

@@ -13,14 +13,16 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import judge
+from colorsort.cell.rollout import CellEpisode, Observer, Step, Stopped, rollout
 from colorsort.config import sorting_time_limit
 from colorsort.data.config import CollectConfig
-from colorsort.data.perturbations import Step, perturbed
+from colorsort.data.perturbations import perturbed
 from colorsort.data.schema import features, frame, task_text
 from colorsort.executors.base import held_interrupts
 from colorsort.expert.base import Expert
@@ -76,8 +78,37 @@ def expert_step(expert: Expert, obs: dict) -> Step:
     return Step(action, action)
 
 
-class _Stopped(Exception):
-    """Recording was asked to stop."""
+def perturbed_step(hooks: list, expert: Expert, obs: dict) -> Step:
+    """This step's actions: the expert's for ``obs`` through the perturbations' ``hooks``."""
+    return perturbed(hooks, partial(expert_step, expert, obs))
+
+
+class FrameWriter(Observer):
+    """Adds each step's frame (the observation acted on, the stored action) to the dataset being recorded, and
+    times where the step's wall time went (``ShardReport.seconds``)."""
+
+    def __init__(self, env: ColorSort, dataset: Any, cameras: tuple[str, ...], task: str, seconds: dict[str, float]):
+        self.env, self.dataset, self.cameras, self.task, self.sec = env, dataset, cameras, task, seconds
+        self.frames = 0
+        self._t = self._t_add = 0.0
+        self._rendered_before = 0.0
+
+    def on_observe(self, obs: Any) -> None:
+        self._t = time.perf_counter()
+
+    def on_action(self, obs: Any, step: Step) -> None:
+        t_act = time.perf_counter()
+        self.dataset.add_frame(frame(self.env, obs, step.stored, self.cameras, self.task))
+        self._t_add = time.perf_counter()
+        self.sec["expert"] += t_act - self._t
+        self.sec["frames to lerobot"] += self._t_add - t_act
+        self._rendered_before = self.env.render_seconds
+
+    def on_step(self, obs: Any, info: dict) -> None:
+        rendered = self.env.render_seconds - self._rendered_before
+        self.sec["rendering"] += rendered
+        self.sec["physics and control"] += time.perf_counter() - self._t_add - rendered
+        self.frames += 1
 
 
 def record_shard(config: CollectConfig, indices: list[int], root: Path,
@@ -120,28 +151,11 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
             expert.reset(obs)
             hooks = [p.episode(seed, expert) for p in around_expert]
             first = min(env.boxes_in_play(), key=lambda b: b.serial)
-            task = task_text(first.color, k)
-            frames = 0
-            while len(env.events) < k and env.cur_time < limit:
-                if stop():
-                    raise _Stopped
-                t = time.perf_counter()
-                # stored as float32: the env consumes exactly that; the executed action is the stored one
-                # unless a perturbation holds something back
-                step = perturbed(hooks, partial(expert_step, expert, obs))
-                action, executed = step.stored, step.executed
-                t_act = time.perf_counter()
-                dataset.add_frame(frame(env, obs, action, config.cameras, task))
-                t_add = time.perf_counter()
-                render_before = env.render_seconds
-                obs, _, _, _ = env.step(executed)
-                t_step = time.perf_counter()
-                rendered = env.render_seconds - render_before
-                sec["expert"] += t_act - t
-                sec["frames to lerobot"] += t_add - t_act
-                sec["rendering"] += rendered
-                sec["physics and control"] += t_step - t_add - rendered
-                frames += 1
+            writer = FrameWriter(env, dataset, config.cameras, task_text(first.color, k), sec)
+            # stored as float32: the env consumes exactly that; the executed action is the stored one unless a
+            # perturbation holds something back
+            rollout(CellEpisode(env, k, limit), obs, partial(perturbed_step, hooks, expert), [writer], stop=stop)
+            frames = writer.frames
             reason = judge(env.events, k).reason
             t = time.perf_counter()
             with held_interrupts():  # a save cut short would cost every episode of the shard
@@ -154,7 +168,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                 out.tried.append(index)
             sec["episode saving"] += time.perf_counter() - t
             report(EpisodeResult(index, seed, reason == "ok", reason, frames, frames / config.fps))
-    except (KeyboardInterrupt, _Stopped):
+    except (KeyboardInterrupt, Stopped):
         out.interrupted = True
     except Exception:  # noqa: BLE001 - reported to the caller, finished episodes are still saved
         out.error = traceback.format_exc()

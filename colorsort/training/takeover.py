@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from colorsort.benchmark.evaluate import observation_settings
 from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.policies import LeRobotPolicy
 from colorsort.cell.privileged import take_over_view
+from colorsort.cell.rollout import GymEpisode, Observer, Step, rollout
 from colorsort.data.config import CollectConfig, check_vcodec
 from colorsort.data.schema import features, frame
 from colorsort.errors import ConfigError
@@ -101,6 +103,17 @@ def handover_step(seed: int, handover: tuple[int, int]) -> int:
     return int(np.random.default_rng([seed, 0x7A6E]).integers(handover[0], handover[1] + 1))
 
 
+class Labels(Observer):
+    """DAgger's labels: each frame from the handover on, the robosuite observation acted on and the expert's
+    action, with the take-overs' own task text."""
+
+    def __init__(self, gym: ColorSortGymEnv, dataset: Any, cameras: tuple[str, ...]):
+        self.gym, self.dataset, self.cameras = gym, dataset, cameras
+
+    def on_action(self, obs: Any, step: Step) -> None:
+        self.dataset.add_frame(frame(self.gym.env, self.gym.raw_obs, step.stored, self.cameras, TAKEOVER_TASK))
+
+
 def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
     """Play ``config.episodes`` episodes, the policy first and the expert from the handover on; save every episode
     the expert finished right as a LeRobot episode of its frames. The dataset is finalized whatever stops it."""
@@ -125,21 +138,13 @@ def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
             obs, _ = gym.reset(seed=seed)
             policy.reset(gym, seed)
             steps = summary.handed_over_at[seed] = handover_step(seed, config.handover)
-            ended = False
-            for _ in range(steps):
-                obs, _, terminated, truncated, _ = gym.step(policy.act(obs))
-                if ended := terminated or truncated:
-                    break
-            if ended:
+            episode = GymEpisode(gym)
+            if rollout(episode, obs, policy.act, max_steps=steps).ended:
                 summary.failed[seed] = "the episode ended before the handover"
                 continue
             expert.take_over(gym.raw_obs, take_over_view(gym.env))
-            while True:
-                action = expert.act(gym.raw_obs).astype(np.float32)
-                dataset.add_frame(frame(gym.env, gym.raw_obs, action, cameras, TAKEOVER_TASK))
-                _, _, terminated, truncated, info = gym.step(action)
-                if terminated or truncated:
-                    break
+            info = rollout(episode, gym.raw_obs, lambda _: expert.act(gym.raw_obs).astype(np.float32),
+                           [Labels(gym, dataset, cameras)]).info
             if info["is_success"]:
                 dataset.save_episode()
                 summary.kept.append(seed)

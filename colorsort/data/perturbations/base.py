@@ -12,11 +12,12 @@ the label and the one the env executes. Adding one is one module in this package
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+
+from colorsort.cell.rollout import Step
 
 if TYPE_CHECKING:
     from colorsort.config import Lighting
@@ -24,14 +25,6 @@ if TYPE_CHECKING:
     from colorsort.variants import Variant
 
 LightDraw = Callable[[np.random.Generator], "Lighting"]
-
-
-@dataclass(frozen=True)
-class Step:
-    """One control step's actions: ``stored`` is the dataset's label, ``executed`` what the env is given."""
-
-    stored: np.ndarray
-    executed: np.ndarray
 
 
 class Hook:
