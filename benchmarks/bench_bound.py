@@ -3,7 +3,7 @@
     python benchmarks/bench_bound.py [--preset tracking-fast] [--seeds 10] [--boxes 20] [--jerk 150] [--acceleration 15]
         [--descend 0.1] [--lift 0.08] [--drop-slots 2] [--wait-at-wait-pose]
 
-Prints, per bin and leg, the shortest cycle (``colorsort.expert.bound``: the box met at the best point
+Prints, per bin and leg, the shortest cycle (``studies.cycle_bound``: the box met at the best point
 of the reach window) four ways: three bounds (each leg at the datasheet joint speeds, acceleration
 unlimited; then at rest on the box and over the bin, with the expert's acceleration; then with its
 jerk too) and a ruckig reference (every leg rest to rest, with the expert's acceleration and jerk); then the
@@ -27,11 +27,11 @@ import argparse
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from studies.cycle_bound import LEGS, MODES, Cycle, commanded_peaks, shortest_cycle, waiting_time
 
 from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, make_config, sorting_time_limit
-from colorsort.expert.bound import LEGS, MODES, Cycle, commanded_peaks, shortest_cycle, waiting_time
 from colorsort.expert.config import TRACKING_EXPERT, ExpertConfig
 from colorsort.expert.factory import make_expert
 from colorsort.expert.planning import JointTrajectory

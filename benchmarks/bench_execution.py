@@ -24,7 +24,8 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-from colorsort.benchmark.execution import execution_table  # noqa: E402
+from studies.chunk_execution import execution_table  # noqa: E402
+
 from colorsort.logs import quiet_robosuite_info  # noqa: E402
 from colorsort.results import recorded  # noqa: E402
 

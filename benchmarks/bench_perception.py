@@ -16,11 +16,11 @@ import argparse
 import time
 
 import numpy as np
+from studies.sensor_views import ViewSampler, wrap_quarter_turn
 
 from colorsort.cell.env import ColorSort
 from colorsort.cell.lighting import CONDITIONS
 from colorsort.expert.perception import UNKNOWN, ColorSensor
-from colorsort.expert.sensor_views import ViewSampler, wrap_quarter_turn
 from colorsort.results import recorded
 
 COLORS = ("red", "green", "blue", "yellow", "purple")

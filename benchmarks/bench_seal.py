@@ -19,7 +19,8 @@ import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-from colorsort.expert.seal_trial import trial  # noqa: E402
+from studies.seal_trial import trial  # noqa: E402
+
 from colorsort.results import recorded  # noqa: E402
 
 

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 from helpers import new_env
+from studies.sensor_views import ViewSampler, wrap_quarter_turn
 
 from colorsort.cell.lighting import CONDITIONS, LightRig
 from colorsort.config import Lighting
 from colorsort.expert.perception import UNKNOWN, ColorSensor, PerceptionConfig
-from colorsort.expert.sensor_views import ViewSampler, wrap_quarter_turn
 
 
 @pytest.fixture(scope="module")

@@ -122,7 +122,8 @@ def test_variant_all_runs_each_shipped_baseline_on_exactly_the_variants_it_fits(
 def test_an_execution_is_the_same_checkpoint_acting_as_named(tmp_path):
     """``with_execution``'s copy of a checkpoint executes as named: LeRobot loads it with that many open-loop steps or
     with its temporal ensembler; the weights are the shipped ones; a bad name is refused."""
-    from colorsort.benchmark.execution import inference_settings, with_execution
+    from studies.chunk_execution import inference_settings, with_execution
+
     from colorsort.benchmark.policies import LeRobotPolicy
 
     chunked = LeRobotPolicy(with_execution(SHIPPED["act-state"], "chunk5", tmp_path)).policy
@@ -141,8 +142,9 @@ def test_executions_are_compared_on_each_variant_named_and_on_validation_seeds_w
     episode runs."""
     from types import SimpleNamespace
 
+    from studies.chunk_execution import execution_table
+
     from colorsort.benchmark import evaluate as evaluation
-    from colorsort.benchmark.execution import execution_table
     from colorsort.variants import VALIDATION_SEEDS
 
     played = []

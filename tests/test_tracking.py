@@ -143,7 +143,7 @@ def test_tracking_observation_state_ends_with_the_encoder(make_env):
 def test_the_cup_seals_and_lifts_a_box_moving_under_it_at_belt_speed():
     """The seal trial (``benchmarks/bench_seal.py``'s): the cup held still, the box riding under it at 0.2 m/s (what
     the expert meets if it did not match the belt at all) and at 0.5 m/s (the fastest belt)."""
-    from colorsort.expert.seal_trial import trial
+    from studies.seal_trial import trial
 
     for speed, max_offset_mm in ((0.2, 25.0), (0.5, 45.0)):
         r = trial(speed)
@@ -270,7 +270,8 @@ def test_the_legs_follow_on_without_a_pause_and_the_carry_leaves_halfway_up_clea
 def test_the_wait_in_an_interception_is_its_duration_beyond_the_time_optimal_plan():
     """An approach told to take 0.5 s longer than it needs (the box not yet within reach) waited 0.5 s; one
     planned time-optimally, from a moving start to a moving goal, waited nothing."""
-    from colorsort.expert.bound import waiting_time
+    from studies.cycle_bound import waiting_time
+
     from colorsort.expert.planning import JointLimits, MotionConfig, plan_motion
 
     limits = JointLimits.of(np.full(6, 3.0), MotionConfig())
@@ -288,7 +289,7 @@ def test_the_jerk_limited_time_from_rest_is_the_s_curves_by_hand():
     """From rest at jerk j: d = j t^3 / 6 while the acceleration climbs; past the S-curve to vmax (a/j + vmax/a
     long, covered at vmax/2 on average) d/vmax + (a/j + vmax/a)/2, which is time_to_stop's d/vmax + vmax/(2a)
     plus half a jerk ramp; a climb too short to reach a peaks at sqrt(vmax j)."""
-    from colorsort.expert.bound import distance_from_rest, time_from_rest, time_to_stop
+    from studies.cycle_bound import distance_from_rest, time_from_rest, time_to_stop
 
     v, a, j = np.array([3.0, 6.0]), 15.0, 150.0
     assert distance_from_rest(0.05, 3.0, a, j) == pytest.approx(j * 0.05**3 / 6)
@@ -308,8 +309,9 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
     datasheet speed, each leg of the ruckig reference is ruckig's own plan (never shorter), the bounds with
     acceleration and then jerk lie between, and the expert's measured cycle on tracking-fast, its waits for the
     boxes taken out, is no shorter than the tightest bound (jerk) of any bin."""
+    from studies.cycle_bound import LEGS, commanded_peaks, cycle_at, shortest_cycle, waiting_time
+
     from colorsort.config import BIN_COLORS
-    from colorsort.expert.bound import LEGS, commanded_peaks, cycle_at, shortest_cycle, waiting_time
     from colorsort.expert.planning import Waypoint, plan_motion
     from colorsort.expert.tracking import carry_height
 
@@ -356,7 +358,7 @@ def test_the_bound_is_the_joint_speed_limit_and_the_expert_never_beats_it(make_e
 def test_commanded_peaks_are_the_reference_finite_differences_per_phase():
     """q = j t^3 / 6 sampled every 50 ms: the acceleration is j t at each middle row, the jerk j throughout; per
     joint (the second moves half as much)."""
-    from colorsort.expert.bound import commanded_peaks
+    from studies.cycle_bound import commanded_peaks
 
     dt, j = 0.05, 60.0
     t = dt * np.arange(10)
