@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import console_script
+from helpers import console_script, new_env
 
 from colorsort.batched.schedule import COLOR_NAMES, episode_draws
 from colorsort.benchmark.gym_env import ColorSortGymEnv
@@ -49,15 +49,13 @@ def test_a_seed_gives_the_batched_cell_the_cpu_cells_boxes(variant):
         env.close()
 
 
-def test_the_rule_kernels_give_what_their_python_twins_give():
-    """The referee's verdict and the belt's run/stop rule, as Warp functions, against the CPU cell's Python."""
+def referee_twins(n: int = 4000) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """The referee's verdicts on ``n`` drawn boxes (positions over the bins, the belt, its end and the floor;
+    speeds around the settling threshold): the kernel's, and the CPU cell's ``Referee.outcome``."""
     import warp as wp
 
     from colorsort.batched import kernels as K
     from colorsort.batched.cell import layout_struct
-
-    layout = CellLayout()
-    lay = layout_struct(layout)
 
     @wp.kernel
     def judge(color: wp.array(dtype=int), pos: wp.array(dtype=wp.vec3), speed: wp.array(dtype=float), L: K.Layout,
@@ -65,15 +63,7 @@ def test_the_rule_kernels_give_what_their_python_twins_give():
         i = wp.tid()
         out[i] = K.outcome_of(color[i], pos[i], speed[i], L)
 
-    @wp.kernel
-    def belt(distance: wp.array(dtype=float), tracking: wp.array(dtype=int), belt_pass: wp.array(dtype=int),
-             sensor_range: float, out: wp.array(dtype=int)):
-        i = wp.tid()
-        out[i] = K.belt_runs(distance[i], sensor_range, tracking[i], belt_pass[i])
-
-    rng = np.random.default_rng(0)
-    n = 4000
-    # positions over the bins, the belt, its end and the floor; speeds around the settling threshold
+    layout, rng = CellLayout(), np.random.default_rng(0)
     pos = np.column_stack([rng.uniform(0.0, 1.4, n), rng.uniform(-0.6, 0.8, n), rng.uniform(0.0, 0.6, n)])
     pos = pos.astype(np.float32)
     speed = rng.uniform(0.0, 0.1, n).astype(np.float32)
@@ -81,7 +71,7 @@ def test_the_rule_kernels_give_what_their_python_twins_give():
     with wp.ScopedDevice("cpu"):
         out = wp.zeros(n, dtype=wp.vec2i)
         wp.launch(judge, dim=n, inputs=[wp.array(color, dtype=int), wp.array(pos, dtype=wp.vec3),
-                                        wp.array(speed, dtype=float), lay, out])
+                                        wp.array(speed, dtype=float), layout_struct(layout), out])
         got = out.numpy()
     referee = Referee(layout, bin_capacity=4)
     outcomes, colors = list(Outcome), list(COLOR_NAMES)
@@ -89,9 +79,37 @@ def test_the_rule_kernels_give_what_their_python_twins_give():
     for c, p, s in zip(color, pos.astype(float), speed.astype(float), strict=True):
         outcome, bin_color = referee.outcome(colors[c], p, s)
         want.append((outcomes.index(outcome) if outcome else -1, BIN_COLORS.index(bin_color) if bin_color else -1))
+    return got, want
+
+
+def test_a_constant_changed_on_one_side_shows_in_the_twin_test(monkeypatch):
+    """The twin test would catch drift: the CPU referee's floor margin moved 1 cm alone, verdicts differ."""
+    from colorsort.cell import referee
+
+    monkeypatch.setattr(referee, "FLOOR_MARGIN", referee.FLOOR_MARGIN + 0.01)
+    got, want = referee_twins()
+    assert (got != np.array(want)).any()
+
+
+def test_the_rule_kernels_give_what_their_python_twins_give():
+    """The referee's verdict and the belt's run/stop rule, as Warp functions, against the CPU cell's own
+    ``Referee.outcome`` and ``conveyor.Belt.drive``."""
+    import warp as wp
+
+    from colorsort.batched import kernels as K
+
+    layout = CellLayout()
+    got, want = referee_twins()
     assert {tuple(w) for w in want} >= {(0, 0), (1, 1), (2, -1), (3, -1), (-1, -1)}  # every verdict was drawn
     assert (got == np.array(want)).all()
 
+    @wp.kernel
+    def belt(distance: wp.array(dtype=float), tracking: wp.array(dtype=int), belt_pass: wp.array(dtype=int),
+             sensor_range: float, out: wp.array(dtype=int)):
+        i = wp.tid()
+        out[i] = K.belt_runs(distance[i], sensor_range, tracking[i], belt_pass[i])
+
+    rng, n = np.random.default_rng(1), 4000
     distance = rng.choice([-1.0, 0.1, 0.26, 0.3], n).astype(np.float32)  # -1: MuJoCo's "no hit"
     tracking, belt_pass = rng.integers(0, 2, n).astype(np.int32), rng.integers(0, 2, n).astype(np.int32)
     with wp.ScopedDevice("cpu"):
@@ -99,8 +117,19 @@ def test_the_rule_kernels_give_what_their_python_twins_give():
         wp.launch(belt, dim=n, inputs=[wp.array(distance, dtype=float), wp.array(tracking, dtype=int),
                                        wp.array(belt_pass, dtype=int), layout.sensor_range, runs])
         got_runs = runs.numpy()
-    detected = (distance >= 0) & (distance <= layout.sensor_range)  # conveyor.Belt.sense, then Belt.drive
-    np.testing.assert_array_equal(got_runs, (tracking | belt_pass | ~detected).astype(int))
+    env = new_env()  # the CPU cell's own belt, its ray reading set to each sample
+    try:
+        cpu_belt = env.plant.belt
+        want_runs = []
+        for d, t, p in zip(distance, tracking, belt_pass, strict=True):
+            cpu_belt.tracking, cpu_belt.belt_pass = bool(t), bool(p)
+            env.mj_data.sensordata[cpu_belt.ray] = d
+            cpu_belt.drive()
+            want_runs.append(int(cpu_belt.running))
+    finally:
+        env.close()
+    np.testing.assert_array_equal(got_runs, want_runs)
+    assert 0 < sum(want_runs) < n  # the belt both ran and stopped
 
 
 @pytest.fixture(scope="module")

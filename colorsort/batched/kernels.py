@@ -11,18 +11,22 @@ import warp as wp
 from mujoco_warp._src import math as mjmath
 from mujoco_warp._src.types import vec11
 
-from colorsort.cell.referee import Outcome
+from colorsort.cell.boxes import SPAWN_CLEAR, SPAWN_GAP, BoxStatus
+from colorsort.cell.referee import FLOOR_MARGIN, Outcome
+from colorsort.config import BIN_COLORS
 
-PARKED = wp.constant(0)  # BoxStatus order: PARKED, IN_PLAY, IN_BIN
-IN_PLAY = wp.constant(1)
-IN_BIN = wp.constant(2)
+# The CPU cell's enums and rule constants, derived here, never restated: a change there is a change here.
+STATUSES = list(BoxStatus)  # the box status codes (the sim state's order)
+PARKED, IN_PLAY, IN_BIN = (wp.constant(STATUSES.index(s)) for s in
+                           (BoxStatus.PARKED, BoxStatus.IN_PLAY, BoxStatus.IN_BIN))
 NONE = wp.constant(-1)  # no outcome yet / no bin
-PLACED = wp.constant(0)  # Outcome order: PLACED, MISPLACED, DROPPED, REJECTED
-MISPLACED = wp.constant(1)
-DROPPED = wp.constant(2)
-REJECTED = wp.constant(3)
 OUTCOMES = list(Outcome)  # the outcome codes, on the host
-N_BIN_COLORS = wp.constant(3)  # colours 0..2 (red, green, blue) have bins; 3, 4 (yellow, purple) do not
+PLACED, MISPLACED, DROPPED, REJECTED = (wp.constant(OUTCOMES.index(o)) for o in
+                                        (Outcome.PLACED, Outcome.MISPLACED, Outcome.DROPPED, Outcome.REJECTED))
+N_BIN_COLORS = wp.constant(len(BIN_COLORS))  # colours 0..2 (red, green, blue) have bins; the others do not
+FLOOR = wp.constant(FLOOR_MARGIN)  # [m] referee: how close to the floor a fallen box's centre is
+GAP = wp.constant(SPAWN_GAP)  # [m] spawner: a box set down this far above the belt
+CLEAR = wp.constant(SPAWN_CLEAR)  # spawner: box sizes the spawn point must be clear of boxes in play
 
 
 @wp.struct
@@ -75,7 +79,7 @@ def outcome_of(color: int, pos: wp.vec3, speed: float, L: Layout) -> wp.vec2i:
         if color == b:
             return wp.vec2i(PLACED, b)
         return wp.vec2i(MISPLACED, b)
-    on_floor = pos[2] < half + 0.02 and b < 0
+    on_floor = pos[2] < half + FLOOR and b < 0
     past_end = pos[0] < L.belt_end_x and wp.abs(pos[1] - L.belt_y) < L.belt_width and pos[2] < L.belt_top_z + half
     if on_floor or past_end:
         if color < N_BIN_COLORS:
@@ -312,7 +316,7 @@ def spawn(now: wp.array(dtype=wp.float64), next_time: wp.array(dtype=wp.float64)
             first = box
         if status[w, box] == IN_PLAY:
             p = xpos[w, box_body[box]]
-            if wp.abs(p[0] - L.spawn_x) < 1.5 * L.box_size and wp.abs(p[1] - L.belt_y) < L.belt_width:
+            if wp.abs(p[0] - L.spawn_x) < CLEAR * L.box_size and wp.abs(p[1] - L.belt_y) < L.belt_width:
                 clear = 0
     n = next_serial[w]
     if clear == 0 or first < 0 or n >= draw_color.shape[1]:
@@ -323,7 +327,7 @@ def spawn(now: wp.array(dtype=wp.float64), next_time: wp.array(dtype=wp.float64)
     va = box_dof[first]
     qpos[w, qa + 0] = L.spawn_x
     qpos[w, qa + 1] = L.belt_y + draw_offset[w, n]
-    qpos[w, qa + 2] = L.belt_top_z + L.box_size / 2.0 + 0.002
+    qpos[w, qa + 2] = L.belt_top_z + L.box_size / 2.0 + GAP
     qpos[w, qa + 3] = wp.cos(yaw / 2.0)
     qpos[w, qa + 4] = 0.0
     qpos[w, qa + 5] = 0.0

@@ -16,6 +16,9 @@ import numpy as np
 from colorsort.cell.models.arena import park_position
 from colorsort.config import ALL_COLORS, BIN_COLORS, BoxStyle, CellLayout
 
+SPAWN_GAP = 0.002  # [m] a box is set down this far above the belt
+SPAWN_CLEAR = 1.5  # box sizes along the belt the spawn point must be clear of boxes in play
+
 
 class BoxStatus(Enum):
     """Where a pooled box is. The order is part of the sim state (``sim_state.py``): append only."""
@@ -102,11 +105,11 @@ class BoxPool:
 
     def place(self, box: Box, color: str, x: float, y: float, yaw: float, serial: int,
               style: BoxStyle | None = None) -> None:
-        """Set a parked box down on the belt, centred at (x, y) [m], turned ``yaw`` [rad], 2 mm up; shaped as
+        """Set a parked box down on the belt, centred at (x, y) [m], turned ``yaw`` [rad], ``SPAWN_GAP`` up; shaped as
         ``style``, else the pool's ``style``."""
         self.shape(box, style or self.style)
         qa, va = self.qpos[box.index], self.qvel[box.index]
-        z = self.layout.belt_top_z + self.height(box) / 2 + 0.002
+        z = self.layout.belt_top_z + self.height(box) / 2 + SPAWN_GAP
         self.data.qpos[qa : qa + 7] = (x, y, z, np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2))
         self.data.qvel[va : va + 6] = 0.0
         self.paint(box, color)
@@ -164,11 +167,11 @@ class BoxPool:
             self.restore(box, box.status)
 
     def spawn_point_clear(self) -> bool:
-        """No box in play within 1.5 box sizes of the spawn point along the belt."""
+        """No box in play within ``SPAWN_CLEAR`` box sizes of the spawn point along the belt."""
         L = self.layout
         size = max(L.box_size, self.style.width if self.style is not None else 0.0)
         for box in self.in_play():
             x, y, _ = self.pos(box)
-            if abs(x - L.spawn_x) < 1.5 * size and abs(y - L.belt_y) < L.belt_width:
+            if abs(x - L.spawn_x) < SPAWN_CLEAR * size and abs(y - L.belt_y) < L.belt_width:
                 return False
         return True

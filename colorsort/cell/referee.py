@@ -29,6 +29,9 @@ logger = logging.getLogger("colorsort")
 SETTLED_SPEED = 0.05  # [m/s] a box slower than this inside a bin counts as resting there
 
 
+FLOOR_MARGIN = 0.02  # [m] a box whose centre is this close to resting on the floor (no bin) has fallen
+
+
 class Outcome(StrEnum):
     """How a box left play; the value is what reports and JSON files print."""
 
@@ -181,7 +184,7 @@ class Referee:
         bin_color = self.bin_under(x, y)
         if bin_color is not None and z < L.bin_size[2] and speed < SETTLED_SPEED:
             return (Outcome.PLACED if color == bin_color else Outcome.MISPLACED), bin_color
-        on_floor = z < half + 0.02 and bin_color is None
+        on_floor = z < half + FLOOR_MARGIN and bin_color is None
         past_end = x < L.belt_end_x and abs(y - L.belt_y) < L.belt_width and z < L.belt_top_z + half
         if on_floor or past_end:
             return (Outcome.DROPPED if color in BIN_COLORS else Outcome.REJECTED), None
