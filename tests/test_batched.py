@@ -83,7 +83,9 @@ def referee_twins(n: int = 4000) -> tuple[np.ndarray, list[tuple[int, int]]]:
 
 
 def test_a_constant_changed_on_one_side_shows_in_the_twin_test(monkeypatch):
-    """The twin test would catch drift: the CPU referee's floor margin moved 1 cm alone, verdicts differ."""
+    """The twin test would catch drift: the CPU referee's floor margin moved 1 cm alone (after the kernels took
+    theirs from it), verdicts differ."""
+    from colorsort.batched import kernels  # noqa: F401 - their constants taken before the change
     from colorsort.cell import referee
 
     monkeypatch.setattr(referee, "FLOOR_MARGIN", referee.FLOOR_MARGIN + 0.01)

@@ -540,7 +540,7 @@ def fake_stages(monkeypatch, successes, minutes_each) -> list[tuple[str, str, in
     update ``minutes_each(seed)`` long), every evaluation ``successes(seed, step, validating)`` successes of 2
     episodes on validation seeds, of all asked for otherwise. The evaluations run, as (checkpoint folder, variant,
     first validation seed or None, stage folder), filled as the pipeline runs."""
-    from colorsort.training import ship
+    from colorsort.training.publishing import ship
 
     evaluated: list[tuple[str, str, int | None, str]] = []
 
@@ -684,7 +684,7 @@ def test_a_baseline_stored_before_a_setting_existed_takes_seeds_of_its_recipe_at
     """act-camera-tracking-dagger's scores.json predates dagger.rollout: a later seed of its own recipe may join it
     (the setting ran as its default, "last"), and a run with rollout="chosen" may not."""
     from colorsort.errors import ConfigError
-    from colorsort.training.ship import addable
+    from colorsort.training.publishing.ship import addable
 
     shipped = Path(__file__).parents[1] / "baselines" / "act-camera-tracking-dagger"
     assert "rollout" not in json.loads((shipped / "scores.json").read_text())["recipe"]["dagger"]
@@ -699,7 +699,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     """``--add-to DIR`` adds a later run's training seeds (the same recipe and flags, other seeds) to the baseline
     shipped in DIR: its scores, tables and README gain their rows and the sitting, its policy and learning curve stay
     the first seed's; another recipe, a seed it holds, no baseline there, or --ship beside it: exit 2, nothing run."""
-    from colorsort.training import tables
+    from colorsort.training.publishing import tables
     from colorsort.training.results_file import PipelineResults
 
     best = {(1000, 2): 2, (1001, 3): 2}  # successes on the validation seeds, per (seed, update); else 0
@@ -750,7 +750,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
 
 def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):
     """Reshipping replaces the tracked files of the folder it ships to: that alone is no uncommitted change."""
-    from colorsort.training.ship import commit
+    from colorsort.training.publishing.ship import commit
 
     def git(*args: str) -> None:
         subprocess.run(["git", *args], cwd=tmp_path, check=True, capture_output=True)

@@ -201,8 +201,8 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
     assert json.loads(json.dumps(stored)) == stored
     assert stored["demos"]["perturbations"] == {"brightness": [0.45, 0.75], "late_pass": 100, "late_pick": 10}
     assert stored["policy"]["type"] == "act" and stored["training"]["steps"] == 4000
+    from colorsort.training.publishing.tables import label
     from colorsort.training.results_file import PipelineResults
-    from colorsort.training.tables import label
 
     assert label(PipelineResults.from_json(scores([], stored))) == "ACT, snapshot"
     assert label(PipelineResults.from_json(scores([], {"cameras": ["sensor", "wrist"]}))) == "ACT, sensor+wrist"  # flat
@@ -213,8 +213,8 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     import argparse
 
     from colorsort.training.flags import add_recipe_flags, recipe_changes
+    from colorsort.training.publishing.tables import label
     from colorsort.training.results_file import PipelineResults
-    from colorsort.training.tables import label
 
     recipe = get_recipe("state", {"dagger.rounds": 2, "dagger.episodes": 4, "dagger.handover": (10, 50)})
     assert recipe.label == "ACT + DAgger (2 rounds), state"
@@ -237,7 +237,7 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     assert recipe_changes(args, tracking) == {"dagger.variants": ("tracking-jitter",)}
     with pytest.raises(ValueError, match=r"\['fast'\].*\['tracking', 'tracking-jitter'\]"):
         get_recipe("camera-tracking", {"dagger.rounds": 1, "dagger.variants": ("fast",)})
-    from colorsort.training.ship import dagger_line
+    from colorsort.training.publishing.ship import dagger_line
 
     assert "the last policy played 4 episodes of every training variant" in dagger_line(recipe, 100)
     assert "a new policy was trained from scratch" in dagger_line(recipe, 100)
@@ -249,8 +249,8 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
 
 def test_averaged_checkpoints_name_the_method_and_leave_its_inputs_apart():
     from colorsort.training.method_names import method_name
+    from colorsort.training.publishing.tables import label
     from colorsort.training.results_file import PipelineResults
-    from colorsort.training.tables import label
 
     recipe = get_recipe("camera-tracking", {"training.average": 2})
     assert recipe.label == "ACT (mean of 2 checkpoints), sensor+snapshot+wrist"
@@ -301,7 +301,7 @@ def test_documented_recipe_list_runs_verbatim():
 def test_docs_tables_are_the_ones_scores_json_gives():
     """Every scores block in README and docs/ is what `python tools/baseline_tables.py` writes from its JSON;
     every shipped baseline with scores.json has its table in the docs."""
-    from colorsort.training.tables import fill, pages
+    from colorsort.training.publishing.tables import fill, pages
 
     text = {page: page.read_text() for page in pages(REPO)}
     for page, body in text.items():
@@ -312,7 +312,7 @@ def test_docs_tables_are_the_ones_scores_json_gives():
 
 
 def test_training_times_over_seeds_read_as_one_figure_when_they_round_alike():
-    from colorsort.training.report import span
+    from colorsort.training.publishing.report import span
 
     assert span([53.6, 53.9, 54.2]) == "54"
     assert span([49.2, 57.4]) == "49-57"
@@ -320,7 +320,7 @@ def test_training_times_over_seeds_read_as_one_figure_when_they_round_alike():
 
 
 def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
-    from colorsort.training.tables import fill
+    from colorsort.training.publishing.tables import fill
 
     stale = "before\n<!-- scores baselines/act-camera curve -->\n| old | numbers |\n<!-- end scores -->\nafter\n"
     new = fill(stale, REPO)
@@ -334,7 +334,7 @@ def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
 
 def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_path):
     """One seed: the rate with its Wilson interval; three seeds: their mean and range, never one cell per seed."""
-    from colorsort.training.tables import headline
+    from colorsort.training.publishing.tables import headline
 
     def row(variant: str, seed: int, rate: float) -> dict:
         return score_row(variant=variant, seed=seed, success_rate=rate, success_ci95=[rate - 0.1, rate + 0.05])
@@ -360,8 +360,8 @@ def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_p
 
 def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
     """Two seeds' misplaced boxes add up per (colour, bin); correct and dropped boxes and smaller demo counts do not."""
+    from colorsort.training.publishing.tables import render
     from colorsort.training.results_file import PipelineResults
-    from colorsort.training.tables import render
 
     def row(seed: int, demos: int, boxes: list[tuple[str, str, str | None]]) -> dict:
         episode = {"boxes": [{"color": c, "outcome": o, "bin": b} for c, o, b in boxes]}
@@ -379,7 +379,7 @@ def test_the_mistakes_table_counts_each_wrong_bin_by_colour_over_every_seed():
 def test_a_shipped_readme_says_how_the_demos_were_made():
     """The README's demo line gives each variant's count, with the perturbations that act on some variants only
     after them, and those on every variant once at the end, each as it describes itself."""
-    from colorsort.training.ship import demo_line
+    from colorsort.training.publishing.ship import demo_line
 
     assert demo_line(get_recipe("camera-snapshot")) == (
         "8 on default, 8 on lighting under lights of brightness x0.45-0.75, 8 on jitter, 8 on fast, 16 on "
@@ -464,7 +464,7 @@ def test_the_headline_compares_methods_with_their_size_and_where_they_trained(tm
     torch counts them), the machine from the recipe's device, each README linked from the page that shows it."""
     from safetensors.torch import load_file
 
-    from colorsort.training.tables import headline, parameters
+    from colorsort.training.publishing.tables import headline, parameters
 
     weights = load_file(SHIPPED["act-state"] / "model.safetensors")
     assert parameters(SHIPPED["act-state"]) == sum(t.numel() for t in weights.values())

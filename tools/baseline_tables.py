@@ -3,7 +3,7 @@
     python tools/baseline_tables.py [--check]
 
 A page marks a table with ``<!-- scores baselines/<name> table|curve -->`` ... ``<!-- end scores -->``
-(``colorsort.training.tables``); everything between is replaced. ``--check`` changes nothing and
+(``colorsort.training.publishing.tables``); everything between is replaced. ``--check`` changes nothing and
 exits 1 when a page differs from what its JSON gives.
 """
 
@@ -13,7 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from colorsort.training.tables import fill, pages
+from colorsort.training.publishing.tables import fill, pages
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -53,9 +53,9 @@ def read(path: Path) -> dict:
 
 def plot_runs(files: list[Path], labels: list[str], out: Path) -> None:
     """Each run's learning curve (its first seed's checkpoints on its main variant) on one axis, written to ``out``."""
-    from colorsort.training.report import plot_curves
+    from colorsort.training.publishing.report import plot_curves
+    from colorsort.training.publishing.tables import machine, main_variant
     from colorsort.training.results_file import PipelineResults
-    from colorsort.training.tables import machine, main_variant
 
     if len(labels) != len(files):
         raise ConfigError(f"--labels takes one label per file: {len(files)} files, {len(labels)} labels")
@@ -99,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.analysis == "curves":
         plot_runs(args.scores, args.labels.split(","), args.out)
     else:
-        from colorsort.training.compare import compare
+        from colorsort.training.publishing.compare import compare
         from colorsort.training.results_file import PipelineResults
 
         labels = tuple(args.labels.split(","))

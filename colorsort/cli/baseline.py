@@ -41,8 +41,8 @@ from colorsort.cli.run import guarded
 from colorsort.errors import ConfigError, DataExistsError
 from colorsort.training.flags import add_recipe_flags, recipe_changes
 from colorsort.training.pipeline import UNTIL, RunConfig, run_pipeline
+from colorsort.training.publishing.ship import addable
 from colorsort.training.recipes import RECIPES, Recipe, get_recipe
-from colorsort.training.ship import addable
 
 
 def parse_args(argv: list[str]) -> tuple[argparse.Namespace, Recipe]:

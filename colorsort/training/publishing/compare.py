@@ -7,8 +7,8 @@ variants. An older run's ``scores.json`` comes from git: ``git show COMMIT:basel
 
 from __future__ import annotations
 
+from colorsort.training.publishing.tables import largest_by_variant
 from colorsort.training.results_file import PipelineResults, ScoreRow
-from colorsort.training.tables import largest_by_variant
 
 
 def cells(rows: list[ScoreRow] | None) -> tuple[str, str]:
