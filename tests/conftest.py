@@ -19,7 +19,7 @@ import colorsort  # noqa: E402,F401  (registers the task)
 # --no-loadscope-reorder keeps this order (xdist's own puts the modules with the most tests first).
 LONGEST_FIRST = ("test_batched", "test_scale", "test_collect", "test_lerobot_cli", "test_benchmark", "test_pipeline",
                  "test_crashes", "test_shifts", "test_takeover", "test_expert", "test_tracking", "test_clients",
-                 "test_shipped", "test_demos", "test_report")
+                 "test_shipped", "test_demos", "test_report", "test_rollout", "test_versions")
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

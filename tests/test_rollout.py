@@ -80,6 +80,7 @@ def rounded(x, digits=6):
     return x
 
 
+@pytest.mark.slow
 def test_evaluation_gives_the_episodes_it_gave_before_the_loops_were_one():
     report = run_evaluation("expert", ["default"], 2, cameras=("sensor",), progress=False).reports[0]
     golden = json.loads(GOLDEN.read_text())["evaluation"]
@@ -103,6 +104,7 @@ def frames_summary(root: Path) -> dict:
     return out
 
 
+@pytest.mark.slow
 def test_recording_gives_the_frames_it_gave_before_the_loops_were_one(tmp_path):
     from colorsort.data.collect import collect
     from colorsort.data.config import CollectConfig

@@ -14,6 +14,7 @@ from colorsort.training.pipeline_stages import collect_config, command_of, part_
 from colorsort.training.recipes import get_recipe
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("part", sorted(versions.VERSIONS))
 def test_a_parts_behaviour_changes_only_with_its_version(part):
     recorded = json.loads(RECORDED.read_text())[part]
