@@ -25,7 +25,8 @@ from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
 def commit(shipped: Path | None = None) -> str:
     """The checkout's commit (marked when it has uncommitted changes outside ``shipped``, the folder being
     shipped, whose tracked files a reship replaces), or why there is none."""
-    exclude = [f":(exclude){shipped.resolve()}"] if shipped is not None else []
+    inside = shipped is not None and shipped.resolve().is_relative_to(Path.cwd().resolve())
+    exclude = [f":(exclude){shipped.resolve()}"] if inside and shipped is not None else []
     try:
         sha = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True).stdout.strip()
         dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ":/", *exclude],
@@ -60,7 +61,9 @@ def demo_line(recipe: Recipe) -> str:
     boxes = f"{demos.boxes_per_episode} boxes each" + "".join(f", {v}'s {n}" for v, n in demos.boxes_by_variant)
     expert = ([f"the expert's {', '.join(f'{n} {v:g}' for n, v in demos.expert)} (`ExpertConfig`, changed from its "
                "preset)"] if demos.expert else [])
-    return "; ".join([mix, boxes, *(p.describe() for p in everywhere), *expert])
+    shifts = ([f"each recorded with held-out shifts' training ranges drawn per episode, up to level 1 exclusive "
+               f"(`{demos.shift}`)"] if demos.shift else [])
+    return "; ".join([mix, boxes, *(p.describe() for p in everywhere), *expert, *shifts])
 
 
 def dagger_line(recipe: Recipe, frames: int) -> str:
