@@ -1,4 +1,4 @@
-"""Rewrite the held-out shift tables (README.md, docs/shifts.md) and heatmap from the sweeps in docs/results/shifts/.
+"""Rewrite the held-out shift tables (README.md, docs/shifts.md, docs/shift_results.md) and heatmap from the sweeps in docs/results/shifts/.
 
     python tools/shift_tables.py [--add outputs/sweeps/SWEEP.json ...] [--check] [--out DIR]
 
@@ -18,7 +18,7 @@ from colorsort.benchmark.shift_tables import fill, full_table, headline, heatmap
 
 ROOT = Path(__file__).resolve().parent.parent
 SUMMARIES = ROOT / "docs" / "results" / "shifts"
-PAGES = (ROOT / "README.md", ROOT / "docs" / "shifts.md")
+PAGES = (ROOT / "README.md", ROOT / "docs" / "shifts.md", ROOT / "docs" / "shift_results.md")
 HEATMAP = ROOT / "docs" / "img" / "shift_heatmap.png"
 
 
