@@ -459,7 +459,7 @@ def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path, in_proc
     root = collect(recipe, 1, tmp_path, workers=1)
     (part,) = (tmp_path / "data").glob("seed-1-*")
     assert json.loads((part / "meta" / "colorsort.json").read_text())["settings"]["boxes_per_episode"] == 1
-    assert "--boxes-per-episode" in json.loads((part / "stage.json").read_text())["colorsort-collect"]
+    assert json.loads((part / "stage.json").read_text())["collect"]["boxes_per_episode"] == 1  # in its key
     assert size(root) == size(part) and size(root)[0] == 1
     assert (root / "meta" / "complete").read_text().split() == [part.name]
     assert collect(recipe, 1, tmp_path, workers=1) == root  # reused
