@@ -1,4 +1,5 @@
-"""Rewrite the held-out shift tables (README.md, docs/shifts.md, docs/shift_results.md) and heatmap from the sweeps in docs/results/shifts/.
+"""Rewrite the held-out shift tables (README.md, docs/shifts.md, docs/shift_results.md) and heatmap from the
+sweeps in docs/results/shifts/.
 
     python tools/shift_tables.py [--add outputs/sweeps/SWEEP.json ...] [--check] [--out DIR]
 
