@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any
 
-from colorsort.cell.referee import BoxEvent, Outcome, judge
+from colorsort.cell.referee import BoxEvent, Outcome, judge, outcome_counts
 from colorsort.config import is_distractor
 
 
@@ -57,7 +57,7 @@ class EpisodeResult:
         boxes that left play in order and ``boxes`` their records."""
         counted = list(events[:expected])
         verdict = judge(counted, expected)
-        count = {o: sum(e.outcome is o for e in counted) for o in Outcome}
+        count = outcome_counts(counted)
         return cls(seed=seed, success=verdict.success,
                    ended="success" if verdict.success else "failed" if verdict.failed else "time limit",
                    steps=steps, correct=count[Outcome.PLACED], misplaced=count[Outcome.MISPLACED],

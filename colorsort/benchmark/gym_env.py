@@ -27,7 +27,7 @@ from gymnasium import spaces
 
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, check_cameras
 from colorsort.cell.env import ColorSort
-from colorsort.cell.referee import Outcome, judge
+from colorsort.cell.referee import Outcome, judge, outcome_counts
 from colorsort.config import is_distractor
 from colorsort.data.schema import ENV_STATE_SIZE, box_state, robot_state, state_size
 from colorsort.errors import ConfigError
@@ -165,7 +165,7 @@ class ColorSortGymEnv(gym.Env):
     def _info(self) -> dict[str, Any]:
         events = self.env.events[: self.variant.boxes]
         verdict = judge(events, self.variant.boxes)
-        count = {o: sum(e.outcome is o for e in events) for o in Outcome}
+        count = outcome_counts(events)
         return {
             "is_success": verdict.success,
             "failed": verdict.failed,

@@ -119,6 +119,11 @@ def judge(events: list[BoxEvent], boxes: int) -> Verdict:
     return Verdict(done, done and not wrong, bool(wrong), reason)
 
 
+def outcome_counts(events: list[BoxEvent]) -> dict[Outcome, int]:
+    """How many of ``events`` ended each way."""
+    return {o: sum(e.outcome is o for e in events) for o in Outcome}
+
+
 class Referee:
     """Watches the boxes in play, records how each leaves (``events``, ``tally``) and empties full bins.
 
