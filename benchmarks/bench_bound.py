@@ -29,9 +29,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from studies.cycle_bound import LEGS, MODES, Cycle, commanded_peaks, shortest_cycle, waiting_time
 
-from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, make_config, sorting_time_limit
+from colorsort.envs.robosuite_task import ColorSort
 from colorsort.expert.config import TRACKING_EXPERT, ExpertConfig
 from colorsort.expert.factory import make_expert
 from colorsort.expert.planning import JointTrajectory

@@ -25,6 +25,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 from colorsort.cli.args import parse_image_size  # noqa
 from colorsort.data.collect import CollectSummary, collect  # noqa
 from colorsort.data.config import CollectConfig  # noqa: E402
+from colorsort.executors.base import ExecutorConfig  # noqa: E402
 from colorsort.results import recorded
 
 
@@ -51,7 +52,7 @@ def main() -> None:
         one = run(base)
         after = resource.getrusage(resource.RUSAGE_SELF)
         cores = (after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime) / one.wall_s
-        two = run(replace(base, workers=2, out=str(Path(tmp) / "w2")))
+        two = run(replace(base, executor=ExecutorConfig(workers=2), out=str(Path(tmp) / "w2")))
         size = one.size_mb
 
     h, w = base.image_size

@@ -18,8 +18,8 @@ import time
 import numpy as np
 from studies.sensor_views import ViewSampler, wrap_quarter_turn
 
-from colorsort.cell.env import ColorSort
 from colorsort.cell.lighting import CONDITIONS
+from colorsort.envs.robosuite_task import ColorSort
 from colorsort.expert.perception import UNKNOWN, ColorSensor
 from colorsort.results import recorded
 

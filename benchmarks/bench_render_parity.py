@@ -43,8 +43,8 @@ def run() -> int:
     import colorsort  # noqa: F401  (registers the task)
     from colorsort.batched.cell import BatchedCell
     from colorsort.batched.spec import CellSpec, park_position
-    from colorsort.benchmark.gym_env import ColorSortGymEnv
     from colorsort.benchmark.policies import ExpertPolicy
+    from colorsort.envs.gym_env import ColorSortGymEnv
     from colorsort.variants import get_variant
 
     wp.config.quiet = True

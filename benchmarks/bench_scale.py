@@ -54,7 +54,8 @@ def recording(base: CollectConfig, repeats: int, tmp: Path) -> dict[tuple[str, i
     for r in range(repeats):
         for executor, workers in SETUPS:
             out = tmp / f"{executor}-{workers}-{r}"
-            runs[executor, workers].append(record(replace(base, executor=executor, workers=workers, out=str(out))))
+            config = replace(base, executor=ExecutorConfig(executor, workers), out=str(out))
+            runs[executor, workers].append(record(config))
             print(f"  {executor} x{workers} (repeat {r + 1}): {runs[executor, workers][-1].real_time_factor:.2f}x")
     return runs
 

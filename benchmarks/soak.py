@@ -15,8 +15,8 @@ import argparse
 import time
 from pathlib import Path
 
-from colorsort.cell.env import ColorSort
 from colorsort.config import PRESETS
+from colorsort.envs.robosuite_task import ColorSort
 from colorsort.expert.factory import make_expert
 from colorsort.results import recorded
 

@@ -14,13 +14,13 @@ quiet_robosuite_startup()  # before robosuite logs its import-time notices
 
 try:
     from colorsort.cell import models  # registers IRB140 and SuctionGripper
-    from colorsort.cell.env import ColorSort  # registers the task
+    from colorsort.envs.robosuite_task import ColorSort  # registers the task
 except Exception as error:  # robosuite loads its GL context module at import time
     if is_gl_failure(error):
         raise gl_error(error) from error
     raise
 
-from colorsort.benchmark.gym_env import register_envs  # noqa: E402
+from colorsort.envs.gym_env import register_envs  # noqa: E402
 
 register_envs()
 

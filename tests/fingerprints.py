@@ -89,7 +89,7 @@ def expert() -> str:
 def recorder() -> str:
     """What a recorded frame holds: the dataset's features, and the first frame's values (not its images) and
     task, on a camera dataset of the stopping belt."""
-    from colorsort.data.schema import features, frame, task_text
+    from colorsort.envs.schema import features, frame, task_text
 
     env = make(has_offscreen_renderer=True, use_camera_obs=True, camera_names=["snapshot"], camera_heights=32,
                camera_widths=32)

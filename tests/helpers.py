@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 import robosuite as suite
 
-from colorsort.cell.env import ColorSort
+from colorsort.envs.robosuite_task import ColorSort
 
 TINY = dict(episodes=2, image_size=(64, 64), cameras=("scene", "wrist"))  # two one-box episodes
 

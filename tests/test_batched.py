@@ -15,13 +15,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import console_script, new_env
+from helpers import console_script, exit_status, new_env
 
 from colorsort.batched.schedule import COLOR_NAMES, episode_draws
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.policies import ExpertPolicy
 from colorsort.cell.referee import Outcome, Referee
 from colorsort.config import BIN_COLORS, CellLayout
+from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.variants import get_variant
 
 SEED = 10_000  # the first evaluation seed of `default`: its first box, red, is placed at 6.4 s by the expert
@@ -91,6 +91,68 @@ def test_a_constant_changed_on_one_side_shows_in_the_twin_test(monkeypatch):
     monkeypatch.setattr(referee, "FLOOR_MARGIN", referee.FLOOR_MARGIN + 0.01)
     got, want = referee_twins()
     assert (got != np.array(want)).any()
+
+
+def observe_twins(n_joints: int, tracking: bool, seed: int = 0) -> tuple[np.ndarray, ...]:
+    """The ``observe`` kernel on drawn synthetic worlds (joint angles, cup pose, flags, boxes in play or not, their
+    serials and colours), and what the CPU cell's layout (``cell.observation``) packs from the same numbers:
+    (kernel state, kernel box state, CPU state, CPU box state), one row per world."""
+    import warp as wp
+
+    from colorsort.batched import kernels as K
+    from colorsort.batched.observe import observation_layout, observe
+    from colorsort.cell.boxes import BoxStatus
+    from colorsort.cell.observation import BOX_STATE, StateLayout
+
+    rng, worlds, pool = np.random.default_rng(seed), 64, 4
+    layout = StateLayout(n_joints, tracking)
+    box_qpos = np.arange(pool) * 7 + n_joints + 3  # each box's free joint after the arm's and three others
+    nq = int(box_qpos[-1]) + 7
+    arm_qpos, arm_dof = rng.permutation(n_joints).astype(np.int32), rng.permutation(n_joints).astype(np.int32) + 2
+    qpos, qvel = rng.normal(size=(worlds, nq)), rng.normal(size=(worlds, nq + 2))
+    cup, quat = rng.normal(size=(worlds, 3)), rng.normal(size=(worlds, 4))  # quat as MuJoCo keeps it: w, x, y, z
+    suction, held, detected, running = (rng.integers(0, 2, worlds) for _ in range(4))
+    held = np.where(held > 0, rng.integers(0, pool, worlds), -1)
+    travel = rng.uniform(0, 5, worlds)
+    in_play, parked = K.STATUSES.index(BoxStatus.IN_PLAY), K.STATUSES.index(BoxStatus.PARKED)
+    status = rng.integers(0, len(K.STATUSES), (worlds, pool))
+    status[:8] = parked  # worlds with no box in play
+    color = rng.integers(0, BOX_STATE.n_colors, (worlds, pool))
+    serial = rng.permutation(worlds * pool).reshape(worlds, pool)
+    with wp.ScopedDevice("cpu"):
+        state = wp.zeros((worlds, layout.size), dtype=float)
+        env_state = wp.zeros((worlds, BOX_STATE.size), dtype=float)
+        wp.launch(observe, dim=worlds, inputs=[
+            wp.array(qpos.astype(np.float32), dtype=float), wp.array(qvel.astype(np.float32), dtype=float),
+            wp.array(cup[:, None, :].astype(np.float32), dtype=wp.vec3),
+            wp.array(quat[:, None, :].astype(np.float32), dtype=wp.quat), wp.array(arm_qpos, dtype=int),
+            wp.array(arm_dof, dtype=int), 0, 0, wp.array(suction, dtype=int), wp.array(held, dtype=int),
+            wp.array(detected, dtype=int), wp.array(running, dtype=int), wp.array(travel, dtype=wp.float64), pool,
+            wp.array(status.astype(np.int32), dtype=int), wp.array(color.astype(np.int32), dtype=int),
+            wp.array(serial.astype(np.int32), dtype=int), wp.array(box_qpos.astype(np.int32), dtype=int),
+            observation_layout(layout, BOX_STATE), state, env_state])
+        got_state, got_box = state.numpy(), env_state.numpy()
+    want_state, want_box = [], []
+    for w in range(worlds):
+        flags = (float(suction[w]), float(held[w] >= 0), float(detected[w]), float(running[w]))
+        want_state.append(layout.pack(qpos[w, arm_qpos], qvel[w, arm_dof], cup[w], quat[w, [1, 2, 3, 0]], flags,
+                                      travel[w] if tracking else None))
+        playing = [b for b in range(pool) if status[w, b] == in_play]
+        first = min(playing, key=lambda b: serial[w, b]) if playing else None
+        want_box.append(BOX_STATE.pack(None if first is None else int(color[w, first]),
+                                       None if first is None else qpos[w, box_qpos[first] : box_qpos[first] + 7]))
+    return got_state, got_box, np.array(want_state), np.array(want_box)
+
+
+@pytest.mark.parametrize(("n_joints", "tracking"), [(6, False), (6, True), (7, True)])
+def test_the_observe_kernel_writes_the_cpu_cells_observation_layout(n_joints, tracking):
+    """``observation.state`` and ``observation.environment_state`` as the kernel writes them, against the CPU cell's
+    layout packed from the same synthetic numbers: another arm (7 joints, the Panda's) and the tracking belt's encoder
+    move every offset, so a kernel that wrote at offsets of its own would differ."""
+    got_state, got_box, want_state, want_box = observe_twins(n_joints, tracking)
+    assert want_box[:, -1].any() and not want_box[:, -1].all()  # worlds with a box in play and without
+    np.testing.assert_allclose(got_state, want_state, rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(got_box, want_box, rtol=1e-6, atol=1e-6)
 
 
 def test_the_rule_kernels_give_what_their_python_twins_give():
@@ -244,9 +306,7 @@ def test_the_default_install_path_never_imports_warp():
 def test_warp_backend_arguments_are_checked(args, message, capsys):
     from colorsort.cli.eval import main
 
-    with pytest.raises(SystemExit) as exit_info:
-        main(["--policy", "expert", *args])
-    assert exit_info.value.code == 2
+    assert exit_status(main, ["--policy", "expert", *args]) == 2
     assert message in capsys.readouterr().err
 
 
@@ -397,3 +457,19 @@ def test_only_a_policy_that_keeps_nothing_but_its_queue_of_actions_is_rolled():
     assert restart_period(ACTConfig(chunk_size=20, n_action_steps=1, temporal_ensemble_coeff=0.01)) is None
     assert restart_period(DiffusionConfig(n_obs_steps=1, horizon=16, n_action_steps=8)) == 8
     assert restart_period(DiffusionConfig(n_obs_steps=2, horizon=16, n_action_steps=8)) is None
+
+
+def test_a_cuda_device_without_a_gpu_exits_2_with_one_line_that_names_the_cpu_device(capsys):
+    """``--backend warp --device cuda:0`` where no GPU is visible: exit 2 and ColorSort's line (not torch's driver
+    message, exit 1); a device that is neither cpu nor cuda:N names both."""
+    import warp as wp
+
+    from colorsort.cli.eval import main
+
+    if wp.get_cuda_device_count():
+        pytest.skip("a GPU is visible here")
+    assert exit_status(main, ["--backend", "warp", "--device", "cuda:0", "--episodes", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "no CUDA device is visible" in err and "--device cpu runs Warp's CPU device" in err
+    assert exit_status(main, ["--backend", "warp", "--device", "gpu", "--episodes", "1"]) == 2
+    assert "give cpu (Warp's CPU device) or cuda:N" in capsys.readouterr().err

@@ -9,10 +9,10 @@ from gymnasium.utils.env_checker import check_env
 from helpers import console_script, exit_status
 
 from colorsort.benchmark.evaluate import evaluate
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import wilson_interval
 from colorsort.cli.eval import main as eval_main
 from colorsort.config import BIN_COLORS, COLORS, Lighting
+from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS, get_variant
 
 SMALL = dict(image_size=(32, 32), cameras=("scene", "wrist"))
@@ -32,7 +32,7 @@ def test_every_registered_id_passes_gymnasiums_env_checker_and_steps_in_lerobots
     from lerobot.envs.factory import make_env
     from lerobot.envs.utils import preprocess_observation
 
-    from colorsort.benchmark.lerobot_env import ColorSortEnv
+    from colorsort.envs.lerobot_env import ColorSortEnv
 
     cfg = ColorSortEnv(task=gym_id.removeprefix("colorsort/"), image_size=32, episode_length=3)
     envs = make_env(cfg, n_envs=1)["colorsort"][0]

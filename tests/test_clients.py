@@ -16,7 +16,7 @@ import robosuite as suite
 from test_bins import drop_into_bin, run, the_box
 from test_expert import make_expert_env, run_until
 
-from colorsort.benchmark.gym_env import ColorSortGymEnv
+from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.robots import ROBOTS
 from colorsort.variants import DEFAULT_GYM_ID, VARIANTS
 

@@ -19,7 +19,7 @@ from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.data.store import MARKER
-from colorsort.executors.base import chunks
+from colorsort.executors.base import ExecutorConfig, chunks
 from colorsort.expert.sorter import SortingExpert
 
 REPO = Path(__file__).resolve().parents[1]
@@ -38,7 +38,7 @@ def snapshot(root):
 @pytest.mark.parametrize("kwargs, match", [
     (dict(cameras=("top",)), "scene"), (dict(fps=30), "Valid values"), (dict(vcodec="mjpeg"), "h264"),
     (dict(preset="nope"), "Valid presets"), (dict(robot="KUKA"), "Valid robots"),
-    (dict(image_size=(63, 64)), "even"), (dict(workers=0), "valid values"),
+    (dict(image_size=(63, 64)), "even"),
     (dict(resume=True, overwrite=True), "not both"),
     (dict(perturbations=(Brightness(0.5, 0.9),)), "lighting"),
     (dict(variant="jitter", perturbations=(Brightness(0.5, 0.9),)), "lighting"),
@@ -48,6 +48,8 @@ def snapshot(root):
 def test_bad_settings_name_the_valid_choices(kwargs, match):
     with pytest.raises(ValueError, match=match):
         CollectConfig(**kwargs)
+    with pytest.raises(ValueError, match="valid values"):  # the executor group checks its own fields
+        ExecutorConfig(workers=0)
 
 
 @pytest.mark.parametrize("make, match", [
@@ -206,8 +208,8 @@ def test_same_seeds_give_the_same_data_whatever_the_worker_count_or_cameras(tiny
     """The tiny dataset's episodes (one process, two cameras) recorded again by two worker processes without
     cameras: every frame's state, action and simulator state the same (the images are in its videos)."""
     out = tmp_path / "two_workers"
-    summary = collect(CollectConfig(out=str(out), workers=2, **{**TINY, "cameras": ()}), progress=False,
-                      log=lambda _: None)
+    config = CollectConfig(out=str(out), executor=ExecutorConfig(workers=2), **{**TINY, "cameras": ()})
+    summary = collect(config, progress=False, log=lambda _: None)
     assert summary.kept == 2 and not summary.errors
     one, two = data_table(tiny_dataset), data_table(out)
     assert one.keys() == two.keys()
@@ -258,8 +260,8 @@ def test_a_variant_records_the_benchmarks_own_episode_for_each_seed(tmp_path):
     centre line and turned), replay rebuilds the variant's task, and the marker says which variant."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    from colorsort.benchmark.gym_env import ColorSortGymEnv
     from colorsort.data.replay import replay
+    from colorsort.envs.gym_env import ColorSortGymEnv
     from colorsort.variants import get_variant
 
     root = tmp_path / "jitter"

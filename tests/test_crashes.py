@@ -16,6 +16,7 @@ from colorsort.cli.collect import main as collect_main
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
 from colorsort.data.store import MARKER, SHARD_MARKER
+from colorsort.executors.base import ExecutorConfig
 
 pytestmark = pytest.mark.slow  # killed workers, interrupted runs
 
@@ -27,13 +28,13 @@ def test_a_local_worker_killed_outright_loses_only_its_shard_and_resume_complete
     killed = []
     # 1 s: a shard of 2 state-only episodes was once recorded within 3 s of its worker starting
     watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 1.0, killed)
-    summary = collect(CollectConfig(out=str(out), workers=2, retries=0, **SCALE), **QUIET)
+    summary = collect(CollectConfig(out=str(out), executor=ExecutorConfig(workers=2, retries=0), **SCALE), **QUIET)
     watcher.join()
     assert killed and len(summary.errors) == 1 and "SIGKILL" in summary.errors[0]
     assert json.loads((out / MARKER).read_text())["episodes"] == [0, 1]  # the other shard is kept
     assert LeRobotDataset("local/colorsort", root=out).num_episodes == 2
 
-    summary = collect(CollectConfig(out=str(out), workers=2, resume=True, **SCALE), **QUIET)
+    summary = collect(CollectConfig(out=str(out), executor=ExecutorConfig(workers=2), resume=True, **SCALE), **QUIET)
     assert summary.tried == 2 and summary.kept == 2 and not summary.errors
     same_data(reference, out)
 
@@ -68,7 +69,8 @@ def test_a_worker_file_killed_mid_write_does_not_stop_resume(reference, tmp_path
     out = tmp_path / "ds"
     staging = tmp_path / ".ds.staging"  # as a run killed between opening and writing a worker file leaves it
     staging.mkdir()
-    config = CollectConfig(out=str(out), episodes=3, boxes_per_episode=2, cameras=(), shard_size=1, workers=2)
+    config = CollectConfig(out=str(out), episodes=3, boxes_per_episode=2, cameras=(), shard_size=1,
+                           executor=ExecutorConfig(workers=2))
     (staging / "run.json").write_text(json.dumps({"run": "killed-run", "settings": config.settings()}))
     (staging / "shard-000002.worker.json").write_text("")
     summary = collect(replace(config, resume=True), **QUIET)

@@ -7,8 +7,8 @@ import pytest
 from helpers import TINY
 
 from colorsort.config import COLORS
-from colorsort.data.schema import ACTION, ENV_STATE, SIM_STATE, STATE, image_key
 from colorsort.data.store import MARKER
+from colorsort.envs.schema import ACTION, ENV_STATE, SIM_STATE, STATE, image_key
 
 FPS = 20
 

@@ -10,7 +10,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "colorsort"
 # Lowest first; a module may import its own layer and those before it.
-LAYERS = ("base", "executors", "shifts", "cell", "expert", "data", "benchmark", "batched", "training", "cli")
+LAYERS = ("base", "executors", "shifts", "cell", "envs", "expert", "data", "benchmark", "batched", "training", "cli")
 MAX_LINES = 400
 
 

@@ -102,7 +102,7 @@ def test_readme_lerobot_eval_command_runs_as_written(readme_checkpoint):
 def test_a_state_only_env_config_has_no_visual_features():
     from lerobot.utils.constants import OBS_ENV_STATE, OBS_STATE
 
-    from colorsort.benchmark.lerobot_env import ColorSortEnv
+    from colorsort.envs.lerobot_env import ColorSortEnv
 
     cfg = ColorSortEnv(cameras="none", task="ColorSort-RobotsPanda-v0")
     assert set(cfg.features_map.values()) == {"action", OBS_STATE, OBS_ENV_STATE}
@@ -110,7 +110,7 @@ def test_a_state_only_env_config_has_no_visual_features():
 
 
 def test_an_unknown_task_names_the_valid_ones():
-    from colorsort.benchmark.lerobot_env import ColorSortEnv
+    from colorsort.envs.lerobot_env import ColorSortEnv
 
     with pytest.raises(ValueError, match="Valid tasks: .*ColorSort-Jitter-v0"):
         ColorSortEnv(task="ColorSort-Hard-v0")
@@ -144,8 +144,8 @@ def test_a_lerobot_policy_runs_an_episode_through_lerobots_env_config(tiny_datas
     from lerobot.envs.factory import make_env, make_env_pre_post_processors
     from lerobot.scripts.lerobot_eval import rollout
 
-    from colorsort.benchmark.lerobot_env import ColorSortEnv
     from colorsort.benchmark.policies import LeRobotPolicy
+    from colorsort.envs.lerobot_env import ColorSortEnv
 
     checkpoint = tiny_act(tiny_dataset, tmp_path / "act")
     loaded = LeRobotPolicy(checkpoint)  # what colorsort-eval --policy PATH loads

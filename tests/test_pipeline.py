@@ -477,7 +477,7 @@ def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_pa
     refused, and a bad value names its range."""
     from colorsort.training.pipeline_stages import collect, collect_command, size
 
-    _, recipe = colorsort_baseline.parse_args([
+    recipe = colorsort_baseline.chosen_recipe([
         "--recipe", "state", "--demos.train_mix=lighting:1,default:1", "--demos.counts=2",
         "--demos.boxes_per_episode=1", "--demos.late_pass=0", "--demos.brightness=0.45,0.75", "--demos.late_pick=5",
         "--demos.turn_to_box=false"])
@@ -495,9 +495,9 @@ def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_pa
     with pytest.raises(ValueError, match="lighting"):
         get_recipe("state", {"demos.brightness": Brightness(0.45, 0.75)})
     with pytest.raises(ValueError, match="brightness"):
-        colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--demos.brightness=0.9,0.5"])
+        colorsort_baseline.chosen_recipe(["--recipe", "camera-snapshot", "--demos.brightness=0.9,0.5"])
     with pytest.raises(ValueError, match="late_pick"):
-        colorsort_baseline.parse_args(["--recipe", "camera-snapshot", "--demos.late_pick=101"])
+        colorsort_baseline.chosen_recipe(["--recipe", "camera-snapshot", "--demos.late_pick=101"])
 
 
 def test_tracking_acts_chunks_are_temporally_ensembled_and_a_reused_run_takes_the_recipes_inference_settings(

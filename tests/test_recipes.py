@@ -55,7 +55,7 @@ def test_the_diffusion_recipe_takes_its_denoiser_settings_and_names_its_evaluati
                 "--policy.optimizer_lr=0.0003", "--policy.scheduler_warmup_steps=200",
                 "--policy.num_train_timesteps=100"):
         assert arg in train_command(preset, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
-    _, recipe = colorsort_baseline.parse_args(["--recipe", "camera-diffusion", "--policy.prediction_type=epsilon",
+    recipe = colorsort_baseline.chosen_recipe(["--recipe", "camera-diffusion", "--policy.prediction_type=epsilon",
                                                "--policy.noise_scheduler_type=DDPM", "--policy.optimizer_lr=1e-4",
                                                "--policy.scheduler_warmup_steps=500"])
     cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
@@ -80,7 +80,7 @@ def test_a_learning_rate_reaches_lerobot_train_for_act_and_names_its_runs_apart(
     another rate is never reused); a policy without the field has no such flag."""
     from colorsort.training.pipeline_stages import train_command, train_settings
 
-    _, recipe = colorsort_baseline.parse_args(["--recipe", "camera", "--policy.optimizer_lr=3e-4",
+    recipe = colorsort_baseline.chosen_recipe(["--recipe", "camera", "--policy.optimizer_lr=3e-4",
                                                "--policy.optimizer_lr_backbone=3e-4"])
     cmd = train_command(recipe, tmp_path / "demos-48", 4000, 1001, tmp_path / "run")
     assert "--policy.optimizer_lr=0.0003" in cmd and "--policy.optimizer_lr_backbone=0.0003" in cmd
@@ -94,7 +94,7 @@ def test_loader_processes_reach_lerobot_train_and_the_shipped_recipes_keep_one(t
     are what they were); 0 loads in the training process; a negative count is refused naming the valid ones."""
     from colorsort.training.pipeline_stages import train_command
 
-    _, recipe = colorsort_baseline.parse_args(["--recipe", "state", "--training.num_workers=0"])
+    recipe = colorsort_baseline.chosen_recipe(["--recipe", "state", "--training.num_workers=0"])
     assert "--num_workers=0" in train_command(recipe, tmp_path / "demos", 10, 1000, tmp_path / "run")
     assert "--num_workers=1" in train_command(get_recipe("camera"), tmp_path / "demos", 10, 1000, tmp_path / "run")
     with pytest.raises(ValueError, match="num_workers=-1: give 0"):
@@ -138,7 +138,7 @@ def test_relit_training_images_vary_as_the_lighting_variant_but_keep_every_box_c
 
     from colorsort.training.pipeline_stages import train_command
 
-    _, relit = colorsort_baseline.parse_args(["--recipe", "camera", "--training.image_relight=true"])
+    relit = colorsort_baseline.chosen_recipe(["--recipe", "camera", "--training.image_relight=true"])
     args = relit.training.augment_args()
     assert "--dataset.image_transforms.max_num_transforms=3" in args
     assert set(args) <= set(train_command(relit, tmp_path, 10, 1000, tmp_path / "run"))
@@ -177,8 +177,9 @@ def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
 
 
 def test_baseline_help_shows_a_flag_for_every_recipe_field_and_perturbation():
-    """``colorsort-baseline --help``: flags generated from the recipe's sections (each with the chosen recipe's
-    value) and the perturbation registry; ``Recipe.override`` takes what they parse to, and refuses an unknown key."""
+    """``colorsort-baseline --help``: the nested fields of the command's configuration (each with its comment and the
+    chosen recipe's value), ``--policy.type``'s kinds and the perturbation registry's flags; ``Recipe.override``
+    refuses an unknown key."""
     from dataclasses import fields
 
     from colorsort.data.perturbations import PERTURBATIONS
@@ -186,14 +187,44 @@ def test_baseline_help_shows_a_flag_for_every_recipe_field_and_perturbation():
     help_text = subprocess.run(baseline("--recipe", "camera-snapshot", "--help"), capture_output=True, text=True,
                                env={**os.environ, "COLUMNS": "1000"}, timeout=60).stdout
     recipe = get_recipe("camera-snapshot")
-    for section in ("demos", "policy", "training", "evaluation"):
+    for section in ("demos", "policy", "training", "dagger", "evaluation"):
         for f in fields(getattr(recipe, section)):
-            if f.init and f.name != "perturbations":
+            if f.init:
                 assert f"--{section}.{f.name}" in help_text, (section, f.name)
     assert all(f"--demos.{name}" in help_text for name in PERTURBATIONS)
-    assert "(recipe 'camera-snapshot': 4000)" in help_text and "(recipe 'camera-snapshot': 10)" in help_text
+    assert "--policy.type {act,diffusion}" in help_text and "--config_path" in help_text
+    flat = " ".join(help_text.split())
+    assert "--training.steps int training updates of the largest demo set. (default: 4000)" in flat
+    assert "(default: snapshot)" in flat
+    assert '(default: ["brightness:0.45,0.75","late_pass:100","late_pick:10"])' in flat
     with pytest.raises(ValueError, match="Valid settings"):
         recipe.override({"training.stpes": 10})
+
+
+def test_baseline_flags_old_and_new_spellings_and_a_config_file_give_one_recipe(tmp_path):
+    """The comma spelling the docs show, draccus's YAML spelling and ``--config_path`` parse to the same recipe; a
+    perturbation's own flag changes it alone; ``--policy.type`` swaps the kind, with that kind's defaults."""
+    from colorsort.cli.baseline import parse_args
+    from colorsort.data.perturbations.late_pick import LatePick
+
+    old = parse_args(["--recipe", "camera-snapshot", "--demos.counts=8,40", "--training.seeds", "1000,1002",
+                      "--demos.late_pick=30", "--demos.train_mix=default:1,lighting:2", "--add-to", "x"])
+    new = parse_args(["--recipe=camera-snapshot", "--demos.counts=[8,40]", "--training.seeds=[1000,1002]",
+                      "--demos.perturbations=[\"brightness:0.45,0.75\",late_pass:100,late_pick:30]",
+                      "--demos.train_mix=[[default,1],[lighting,2]]", "--add_to=x"])
+    (tmp_path / "run.yaml").write_text("recipe: camera-snapshot\nadd_to: x\ndemos:\n  counts: [8, 40]\n"
+                                       "  train_mix: [[default, 1], [lighting, 2]]\n"
+                                       "  perturbations: ['brightness:0.45,0.75', 'late_pass:100', 'late_pick:30']\n"
+                                       "training:\n  seeds: [1000, 1002]\n")
+    from_file = parse_args(["--config_path", str(tmp_path / "run.yaml")])  # the file's recipe is the preset
+    assert old == new == from_file
+    assert old.demos.perturbations[-1] == LatePick(30) and old.add_to == "x"
+    assert old.chosen() == get_recipe("camera-snapshot", {"demos.counts": (8, 40), "training.seeds": (1000, 1002),
+                                                          "demos.late_pick": LatePick(30),
+                                                          "demos.train_mix": (("default", 1.0), ("lighting", 2.0))})
+    swapped = parse_args(["--recipe", "camera", "--policy.type=diffusion", "--policy.down_dims=32,64"]).chosen()
+    assert swapped.policy.type == "diffusion" and swapped.policy.down_dims == (32, 64)
+    assert swapped.policy.horizon == 16 and swapped.demos == get_recipe("camera").demos
 
 
 def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
@@ -210,9 +241,7 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
 
 
 def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themselves():
-    import argparse
-
-    from colorsort.training.flags import add_recipe_flags, recipe_changes
+    from colorsort.cli.baseline import parse_args
     from colorsort.training.publishing.tables import label
     from colorsort.training.results_file import PipelineResults
 
@@ -222,19 +251,14 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
     assert stored["dagger"] == {"rounds": 2, "episodes": 4, "handover": [10, 50], "rollout": "last",
                                 "retrain": "scratch", "updates": 0, "variants": []}
     assert label(PipelineResults.from_json(scores([], stored))) == "ACT + DAgger (2 rounds), state"
-    parser = argparse.ArgumentParser()
-    add_recipe_flags(parser, recipe)
-    for text in ("10:50", "10,50"):  # a pair as a list of pairs spells it, and as --help shows it
-        args = parser.parse_args([f"--dagger.handover={text}"])
-        assert recipe_changes(args, recipe) == {"dagger.handover": (10, 50)}
+    for text in ("10:50", "10,50", "[10,50]"):  # a pair as a list of pairs spells it, as --help shows it, as YAML
+        assert parse_args(["--dagger.handover", text]).dagger.handover == (10, 50)
     for change, named in (({"dagger.rounds": -1}, "rounds=-1"), ({"dagger.episodes": 0}, "episodes=0"),
                           ({"dagger.handover": (50, 10)}, "FIRST:LAST")):
         with pytest.raises(ValueError, match=named):
             get_recipe("state", change)
-    tracking = get_recipe("camera-tracking")
-    add_recipe_flags(parser := argparse.ArgumentParser(), tracking)
-    args = parser.parse_args(["--dagger.variants=tracking-jitter"])
-    assert recipe_changes(args, tracking) == {"dagger.variants": ("tracking-jitter",)}
+    args = parse_args(["--recipe", "camera-tracking", "--dagger.variants=tracking-jitter"])
+    assert args.dagger.variants == ("tracking-jitter",)
     with pytest.raises(ValueError, match=r"\['fast'\].*\['tracking', 'tracking-jitter'\]"):
         get_recipe("camera-tracking", {"dagger.rounds": 1, "dagger.variants": ("fast",)})
     from colorsort.training.publishing.ship import dagger_line
@@ -398,7 +422,7 @@ def test_demos_without_the_wrists_turn_get_daggers_labels_without_it(tmp_path, m
     from colorsort.training import pipeline_stages as stages
     from colorsort.training.pipeline_stages import collect_command, label
 
-    _, still = colorsort_baseline.parse_args(["--recipe", "camera", "--demos.turn_to_box=false"])
+    still = colorsort_baseline.chosen_recipe(["--recipe", "camera", "--demos.turn_to_box=false"])
     turning = get_recipe("camera")
     assert "--no-turn" in collect_command(still, "jitter", 0, 8, 2)
     ran: list[list[str]] = []
@@ -415,7 +439,7 @@ def test_the_experts_changed_settings_reach_the_demos_and_daggers_labels_and_key
     from colorsort.training import pipeline_stages as stages
     from colorsort.training.pipeline_stages import collect_command, collect_config, label, part_settings
 
-    _, recipe = colorsort_baseline.parse_args(
+    recipe = colorsort_baseline.chosen_recipe(
         ["--recipe", "camera-tracking", "--demos.expert=press:0.01,track_hold_time:0.15"])
     assert recipe.demos.expert == (("press", 0.01), ("track_hold_time", 0.15))
     preset = get_recipe("camera-tracking")
@@ -433,9 +457,9 @@ def test_the_experts_changed_settings_reach_the_demos_and_daggers_labels_and_key
     assert "--expert=press:0.01,track_hold_time:0.15" in ran[0]
     assert not any(a.startswith("--expert") for a in ran[1])  # the preset's labels keep the key they had
     with pytest.raises(ValueError, match="track_hold_time"):
-        colorsort_baseline.parse_args(["--recipe", "camera-tracking", "--demos.expert=hold:0.15"])
+        colorsort_baseline.chosen_recipe(["--recipe", "camera-tracking", "--demos.expert=hold:0.15"])
     with pytest.raises(ValueError, match=r"press=0.5 is out of range"):
-        colorsort_baseline.parse_args(["--recipe", "camera-tracking", "--demos.expert=press:0.5"])
+        colorsort_baseline.chosen_recipe(["--recipe", "camera-tracking", "--demos.expert=press:0.5"])
 
 
 def test_every_recipes_policy_arguments_are_ones_lerobot_accepts():

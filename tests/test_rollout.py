@@ -1,4 +1,4 @@
-"""The one episode loop (``cell/rollout.py``): what it asks of the actor, what each observer is told and when, how
+"""The one episode loop (``envs/rollout.py``): what it asks of the actor, what each observer is told and when, how
 it stops; and the loops built on it (recording, evaluation, sorting) giving the episodes they gave before it."""
 
 import json
@@ -9,7 +9,7 @@ import pytest
 from helpers import new_env
 
 from colorsort.benchmark.evaluate import run_evaluation
-from colorsort.cell.rollout import CellEpisode, Observer, Step, Stopped, rollout
+from colorsort.envs.rollout import CellEpisode, Observer, Step, Stopped, rollout
 
 GOLDEN = Path(__file__).parent / "data" / "rollout_golden.json"  # made by the four loops before they were one
 

@@ -78,7 +78,7 @@ def test_a_ray_cluster_records_the_same_dataset_and_a_killed_worker_is_retried(r
     out = tmp_path / "ds"
     killed = []
     watcher = kill_worker_of(tmp_path / ".ds.staging", "shard-000002", 3.0, killed)
-    summary = collect(CollectConfig(out=str(out), executor="ray", workers=2, **SCALE), **QUIET)
+    summary = collect(CollectConfig(out=str(out), executor=ExecutorConfig("ray", 2), **SCALE), **QUIET)
     watcher.join()
     assert killed and summary.retried == 1 and not summary.errors
     assert summary.kept == 4 and summary.dataset_episodes == 4  # every episode, once

@@ -17,10 +17,10 @@ import pytest
 from helpers import console_script, exit_status, new_env
 
 from colorsort.benchmark.evaluate import run_evaluation
-from colorsort.benchmark.gym_env import ColorSortGymEnv
-from colorsort.benchmark.lerobot_env import ColorSortEnv
 from colorsort.cli.eval import main as eval_main
 from colorsort.config import BIN_COLORS, BOX, COLORS, CYLINDER, NOVEL_COLORS
+from colorsort.envs.gym_env import ColorSortGymEnv
+from colorsort.envs.lerobot_env import ColorSortEnv
 from colorsort.errors import ConfigError
 from colorsort.executors.base import ExecutorConfig
 from colorsort.shifts import GROUPS, SHIFTS, parse_shifts

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.cell.snapshot import Snapshot
 from colorsort.data.collect import collect
 from colorsort.data.config import CollectConfig
 from colorsort.data.replay import MIN_PSNR_DB, replay
+from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.expert.factory import make_expert
 
 

@@ -131,8 +131,8 @@ def test_it_takes_over_from_a_shipped_policy_in_the_middle_of_an_episode(policy_
     success: every box in the bin of its colour."""
     from baseline_common import SHIPPED
 
-    from colorsort.benchmark.gym_env import ColorSortGymEnv
     from colorsort.benchmark.policies import LeRobotPolicy, checkpoint_cameras
+    from colorsort.envs.gym_env import ColorSortGymEnv
 
     cameras, size = checkpoint_cameras(SHIPPED["act-camera"])
     assert size is not None and "sensor" in cameras  # the expert looks through the policy's own sensor camera
@@ -168,9 +168,9 @@ def test_dagger_records_the_experts_labels_from_the_states_a_policy_reached(tmp_
 
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    from colorsort.benchmark.gym_env import ColorSortGymEnv
     from colorsort.cli.takeover import main
-    from colorsort.data.schema import STATE
+    from colorsort.envs.gym_env import ColorSortGymEnv
+    from colorsort.envs.schema import STATE
     from colorsort.training.takeover import PROVENANCE, TAKEOVER_SEED, TAKEOVER_TASK, TakeoverConfig, handover_step
 
     repo = Path(__file__).resolve().parents[1]

@@ -129,7 +129,7 @@ def test_a_tracking_episode_replays_bit_for_bit(tmp_path):
 
 
 def test_tracking_observation_state_ends_with_the_encoder(make_env):
-    from colorsort.data.schema import robot_state, state_names, state_size
+    from colorsort.envs.schema import robot_state, state_names, state_size
 
     env = tracking_env(make_env)
     obs = env.reset(seed=0)
@@ -154,7 +154,7 @@ def test_the_cup_seals_and_lifts_a_box_moving_under_it_at_belt_speed():
 def test_tracking_variants_give_the_encoder_to_gymnasium_and_lerobot(closing):
     import gymnasium as gym
 
-    from colorsort.benchmark.lerobot_env import ColorSortEnv
+    from colorsort.envs.lerobot_env import ColorSortEnv
 
     env = closing(gym.make("colorsort/ColorSort-Tracking-v0", cameras=()))
     obs, _ = env.reset(seed=0)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from colorsort.cell.env import ColorSort
+from colorsort.envs.robosuite_task import ColorSort
 from colorsort.expert.calibration import Calibration
 from colorsort.expert.config import ExpertConfig
 from colorsort.expert.planning import CupIK, Waypoint, site_yaw

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from colorsort.cell.env import ColorSort
 from colorsort.cell.lighting import LightRig, sensor_effects
 from colorsort.config import Lighting
+from colorsort.envs.robosuite_task import ColorSort
 from colorsort.errors import ConfigError
 from colorsort.expert.perception import CameraModel, wrap_quarter_turn
 

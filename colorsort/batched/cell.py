@@ -28,8 +28,10 @@ import warp as wp
 
 from colorsort.batched import kernels as K
 from colorsort.batched.cameras import BatchedCameras, warp_matids
+from colorsort.batched.observe import observation_layout, observe
 from colorsort.batched.schedule import episode_draws
 from colorsort.batched.spec import CellSpec, copy_model, park_position
+from colorsort.cell.observation import BOX_STATE, StateLayout
 from colorsort.cell.referee import SETTLED_SPEED
 from colorsort.cell.suction import SEAL_ANGLE_DEG
 from colorsort.config import COLORS, CellLayout
@@ -63,6 +65,21 @@ def layout_struct(L: CellLayout) -> K.Layout:
     return lay
 
 
+def check_device(device: str) -> None:
+    """ConfigError, in one line, unless Warp can run on ``device``: "cpu", or "cuda"/"cuda:N" with that GPU visible
+    (without one, torch's and Warp's own errors speak of drivers, not of the flag)."""
+    if device == "cpu":
+        return
+    if device != "cuda" and not (device.startswith("cuda:") and device[5:].isdigit()):
+        raise ConfigError(f"device {device!r}: give cpu (Warp's CPU device) or cuda:N (a GPU)")
+    index = int(device[5:]) if device.startswith("cuda:") else 0
+    visible = wp.get_cuda_device_count()
+    if index >= visible:
+        seen = f"{visible} CUDA device{'s' * (visible != 1)} visible" if visible else "no CUDA device is visible"
+        raise ConfigError(f"--device {device}: {seen} to Warp on this machine; --device cpu runs Warp's CPU device "
+                          "(the same cell, slower)")
+
+
 class BatchedCell:
     """``worlds`` copies of one variant's cell on a Warp device ("cpu" or "cuda:0").
 
@@ -83,6 +100,7 @@ class BatchedCell:
         import torch
 
         self.spec, self.variant, self.worlds, self.max_boxes = spec, variant, worlds, max_boxes
+        check_device(device)
         self.device = wp.get_device(device)
         self.torch_device = torch.device("cpu" if self.device.is_cpu else f"cuda:{self.device.ordinal}")
         s = spec
@@ -140,8 +158,10 @@ class BatchedCell:
             self.draw_offset, self.draw_yaw = wp.zeros((n, E), dtype=float), wp.zeros((n, E), dtype=float)
             self.reward = wp.zeros(n, dtype=float)
             self.action = wp.zeros((n, s.n_joints + 2), dtype=float)
-            self.state = wp.zeros((n, s.n_joints * 2 + 7 + 4 + int(s.config.tracking)), dtype=float)
-            self.env_state = wp.zeros((n, len(COLORS) + 8), dtype=float)
+            state_layout = StateLayout(s.n_joints, s.config.tracking)
+            self.observation_layout = observation_layout(state_layout, BOX_STATE)
+            self.state = wp.zeros((n, state_layout.size), dtype=float)
+            self.env_state = wp.zeros((n, BOX_STATE.size), dtype=float)
             self.cameras = BatchedCameras(m, n, tuple(cameras), image_size) if cameras else None
         self.images: dict = {}
         self._graph = None
@@ -294,10 +314,10 @@ class BatchedCell:
 
     def _launch_observe(self) -> None:
         s, d = self.spec, self.d
-        wp.launch(K.observe, dim=self.worlds, inputs=[
-            d.qpos, d.qvel, d.site_xpos, d.xquat, self.arm_qpos, self.arm_dof, s.n_joints, s.eef_site, s.eef_body,
-            self.suction_cmd, self.held, self.detected, self.running, self.travel, int(s.config.tracking), s.pool_size,
-            self.status, self.color, self.serial, self.box_qpos, len(COLORS), self.state, self.env_state])
+        wp.launch(observe, dim=self.worlds, inputs=[
+            d.qpos, d.qvel, d.site_xpos, d.xquat, self.arm_qpos, self.arm_dof, s.eef_site, s.eef_body,
+            self.suction_cmd, self.held, self.detected, self.running, self.travel, s.pool_size,
+            self.status, self.color, self.serial, self.box_qpos, self.observation_layout, self.state, self.env_state])
 
     def _result(self) -> StepResult:
         return StepResult(wp.to_torch(self.state), wp.to_torch(self.env_state), wp.to_torch(self.reward), self.images)

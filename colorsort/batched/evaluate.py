@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.batched.cell import BatchedCell, Record
+from colorsort.batched.cell import BatchedCell, Record, check_device
 from colorsort.batched.films import Filming, FilmViewer, WaveRecording
 from colorsort.batched.kernels import OUTCOMES
 from colorsort.batched.schedule import COLOR_NAMES
@@ -245,6 +245,7 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
 
     if envs < 1:
         raise ConfigError(f"envs={envs}: give at least 1")
+    check_device(device)  # before the policy is moved there
     variant = get_variant(variant_name)
     seeds = episode_seeds(variant, episodes, seed)
     spec = spec or spec_for_variant(variant.name)

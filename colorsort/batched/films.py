@@ -107,7 +107,7 @@ class FilmViewer:
     """
 
     def __init__(self, spec: CellSpec, variant: Variant, size: tuple[int, int] = FILM_SIZE):
-        from colorsort.benchmark.gym_env import ColorSortGymEnv
+        from colorsort.envs.gym_env import ColorSortGymEnv
 
         self.spec, self.variant, self.size = spec, variant, size
         self.env = ColorSortGymEnv(variant.name, cameras=(), render_mode="rgb_array", fps=round(spec.control_freq))

@@ -345,54 +345,6 @@ def spawn(now: wp.array(dtype=wp.float64), next_time: wp.array(dtype=wp.float64)
 
 
 @wp.kernel
-def observe(qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), site_xpos: wp.array2d(dtype=wp.vec3),
-            xquat: wp.array2d(dtype=wp.quat), arm_qpos: wp.array(dtype=int), arm_dof: wp.array(dtype=int),
-            n_joints: int, eef_site: int, eef_body: int, suction_cmd: wp.array(dtype=int), held: wp.array(dtype=int),
-            detected: wp.array(dtype=int), running: wp.array(dtype=int), travel: wp.array(dtype=wp.float64),
-            tracking: int, pool_size: int, status: wp.array2d(dtype=int), color: wp.array2d(dtype=int),
-            serial: wp.array2d(dtype=int), box_qpos: wp.array(dtype=int), n_colors: int,
-            state: wp.array2d(dtype=float), env_state: wp.array2d(dtype=float)):
-    """``schema.robot_state`` and ``schema.box_state`` (``Plant.next_box_state``): ``observation.state`` and
-    ``observation.environment_state`` of every world."""
-    w = wp.tid()
-    i = int(0)  # noqa: UP018
-    for j in range(n_joints):
-        state[w, i] = qpos[w, arm_qpos[j]]
-        i += 1
-    for j in range(n_joints):
-        state[w, i] = qvel[w, arm_dof[j]]
-        i += 1
-    p = site_xpos[w, eef_site]
-    q = xquat[w, eef_body]
-    for k in range(3):
-        state[w, i + k] = p[k]
-    i += 3
-    state[w, i + 0] = q[1]  # robosuite's eef_quat is (x, y, z, w)
-    state[w, i + 1] = q[2]
-    state[w, i + 2] = q[3]
-    state[w, i + 3] = q[0]
-    i += 4
-    state[w, i + 0] = float(suction_cmd[w])
-    state[w, i + 1] = wp.where(held[w] >= 0, 1.0, 0.0)
-    state[w, i + 2] = float(detected[w])
-    state[w, i + 3] = float(running[w])
-    if tracking != 0:
-        state[w, i + 4] = float(travel[w])
-    best = int(-1)  # noqa: UP018
-    for box in range(pool_size):
-        if status[w, box] == IN_PLAY and (best < 0 or serial[w, box] < serial[w, best]):
-            best = box
-    for k in range(n_colors + 8):
-        env_state[w, k] = 0.0
-    if best >= 0:
-        env_state[w, color[w, best]] = 1.0
-        qa = box_qpos[best]
-        for k in range(7):
-            env_state[w, n_colors + k] = qpos[w, qa + k]
-        env_state[w, n_colors + 7] = 1.0
-
-
-@wp.kernel
 def advance_clock(now: wp.array(dtype=wp.float64), dt: wp.float64, steps: wp.array(dtype=int)):
     """``cur_time += control_timestep`` (float64, as robosuite adds it) and the step count."""
     w = wp.tid()

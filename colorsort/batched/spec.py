@@ -180,7 +180,7 @@ def copy_model(model: mujoco.MjModel) -> mujoco.MjModel:
 
 def spec_for_variant(variant_name: str) -> CellSpec:
     """Build the CPU cell of a benchmark variant (robosuite) and read its spec."""
-    from colorsort.benchmark.gym_env import ColorSortGymEnv
+    from colorsort.envs.gym_env import ColorSortGymEnv
 
     env = ColorSortGymEnv(variant_name, cameras=(), render_mode=None)
     env.reset(seed=0)

@@ -26,9 +26,9 @@ from gymnasium.vector.utils import batch_space
 from colorsort.batched.cell import BatchedCell, StepResult
 from colorsort.batched.evaluate import tally
 from colorsort.batched.spec import CellSpec, spec_for_variant
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.cell.cameras import DEFAULT_IMAGE_SIZE
 from colorsort.cell.referee import Outcome
+from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.errors import ConfigError
 from colorsort.shifts import parse_shifts
 from colorsort.variants import Variant, get_variant

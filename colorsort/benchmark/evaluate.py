@@ -16,12 +16,12 @@ from tqdm import tqdm
 
 from colorsort.benchmark.episode_result import EpisodeResult, box_record
 from colorsort.benchmark.filming import EpisodeFilm
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.cell.plant import Grip
-from colorsort.cell.rollout import GymEpisode, Observer, rollout
+from colorsort.envs.gym_env import ColorSortGymEnv
+from colorsort.envs.rollout import GymEpisode, Observer, rollout
 from colorsort.errors import ConfigError, StageError
 from colorsort.executors.base import (
     DEFAULT_SHARD_SIZE,

@@ -11,10 +11,10 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.cell.referee import Outcome, describe_box
 from colorsort.config import BIN_COLORS
 from colorsort.data.video import VideoWriter, draw_lines
+from colorsort.envs.gym_env import ColorSortGymEnv
 
 FILM_CAMERA = "scene"
 FILM_SIZE = (360, 480)  # (height, width) [px]

@@ -19,8 +19,8 @@ import statistics
 from functools import partial
 from pathlib import Path
 
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.config import Lighting
+from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.errors import ConfigError
 from colorsort.variants import get_variant
 

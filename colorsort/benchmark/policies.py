@@ -14,8 +14,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from colorsort.benchmark.gym_env import ColorSortGymEnv
-from colorsort.data.schema import state_size
+from colorsort.envs.gym_env import ColorSortGymEnv
+from colorsort.envs.schema import state_size
 from colorsort.errors import ConfigError
 from colorsort.expert.config import ExpertConfig
 from colorsort.robots import get_robot

@@ -15,11 +15,11 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome
-from colorsort.cell.rollout import CellEpisode, Observer, Step, rollout
 from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sorting_time_limit
 from colorsort.data.video import VideoWriter, contact_sheet, draw_lines, save_png
+from colorsort.envs.robosuite_task import ColorSort
+from colorsort.envs.rollout import CellEpisode, Observer, Step, rollout
 from colorsort.errors import ConfigError
 from colorsort.expert.base import Expert
 from colorsort.expert.factory import make_expert

@@ -17,6 +17,7 @@ import numpy as np
 from colorsort.cell.boxes import Box, BoxPool
 from colorsort.cell.conveyor import Belt, Spawner
 from colorsort.cell.lighting import LightRig
+from colorsort.cell.observation import BOX_STATE
 from colorsort.cell.referee import Referee
 from colorsort.cell.suction import VacuumSeal
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, Lighting, TaskConfig
@@ -147,14 +148,11 @@ class Plant:
         """The in-play box with the lowest serial: colour one-hot over ``config.COLORS``, pose (7,)
         (centre [m], quaternion w, x, y, z), then 1.0; zeros when no box is in play. Shape (len(COLORS) + 8,)."""
         boxes = self.pool.in_play()
-        out = np.zeros(len(COLORS) + 8, np.float32)
-        if boxes:
-            box = min(boxes, key=lambda b: b.serial)
-            if box.color in COLORS:  # a novel distractor (``config.NOVEL_COLORS``) has no class: no one-hot
-                out[list(COLORS).index(box.color)] = 1.0
-            out[len(COLORS) : len(COLORS) + 7] = self.pool.pose(box)
-            out[-1] = 1.0
-        return out
+        if not boxes:
+            return BOX_STATE.pack(None, None)
+        box = min(boxes, key=lambda b: b.serial)
+        # a novel distractor (``config.NOVEL_COLORS``) has no class: no one-hot
+        return BOX_STATE.pack(list(COLORS).index(box.color) if box.color in COLORS else None, self.pool.pose(box))
 
     def staged_rewards(self) -> dict[str, float]:
         return self.referee.staged_rewards(self.pool, self.data.geom_xpos[self.seal.pad], self.seal.held)

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from colorsort.cell.env import ColorSort
+    from colorsort.envs.robosuite_task import ColorSort
 
 
 @dataclass(frozen=True)

@@ -10,13 +10,15 @@ Example::
     colorsort-baseline --recipe camera --help           # every flag, with camera's values
 
 Every field of the recipe is a flag ``--<section>.<field>=<value>`` (sections ``demos``, ``policy``,
-``training``, ``evaluation``; ``colorsort.training.flags``), generated from the recipe's dataclasses, and
-``--help`` shows each with the chosen recipe's value. Every stage is a documented command, run as a
-subprocess with its command line printed: ``colorsort-collect`` for each training variant (merged with
-LeRobot's ``aggregate_datasets``; a camera recipe's set then loses ``observation.environment_state`` with
-``remove_feature``), ``lerobot-train`` (ACT or diffusion), and ``colorsort-eval`` on the variants' fixed
-evaluation seeds, with the learning curve from the checkpoints saved along the way. It prints a Markdown
-table and writes ``OUT/results.json``, ``OUT/success_vs_demos.png`` and ``OUT/learning_curve.png``.
+``training``, ``dagger``, ``evaluation``): the command's configuration is its command line, parsed by draccus as
+LeRobot's are (``colorsort.cli.config_args``, docs/commands.md), ``--config_path FILE`` reads any of them from YAML,
+``--policy.type`` picks ACT or diffusion, and ``--help`` shows each with its comment and the chosen recipe's value.
+Every stage is a documented command, run as a subprocess with its command line printed: ``colorsort-collect`` for
+each training variant (merged with LeRobot's ``aggregate_datasets``; a camera recipe's set then loses
+``observation.environment_state`` with ``remove_feature``), ``lerobot-train`` (ACT or diffusion), and
+``colorsort-eval`` on the variants' fixed evaluation seeds, with the learning curve from the checkpoints saved
+along the way. It prints a Markdown table and writes ``OUT/results.json``, ``OUT/success_vs_demos.png`` and
+``OUT/learning_curve.png``.
 ``--ship DIR`` copies the largest set's ``pretrained_model`` to DIR with ``scores.json``, the plots and a
 README of how it was made. ``--add-to DIR`` adds the run's training seeds to the baseline shipped in DIR (the
 same recipe and flags but ``--training.seeds``, which names seeds it does not hold): its scores, tables and README
@@ -31,40 +33,100 @@ Exit status 0 done, 1 a stage failed, 2 bad arguments or an OUT holding a stage 
 
 from __future__ import annotations
 
-import argparse
 import shlex
 import shutil
 import sys
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import draccus
+
+from colorsort.cli.config_args import Spelling, parse_config
 from colorsort.cli.run import guarded
+from colorsort.data.perturbations import PERTURBATIONS
 from colorsort.errors import ConfigError, DataExistsError
-from colorsort.training.flags import add_recipe_flags, recipe_changes
+from colorsort.training.dagger_config import DaggerConfig
+from colorsort.training.demos_config import DemosConfig
 from colorsort.training.pipeline import UNTIL, RunConfig, run_pipeline
+from colorsort.training.policy_config import SMALL_ACT, PolicyConfig
 from colorsort.training.publishing.ship import addable
-from colorsort.training.recipes import RECIPES, Recipe, get_recipe
+from colorsort.training.recipes import RECIPES, SECTIONS, EvaluationConfig, Recipe, TrainingConfig, get_recipe
 
 
-def parse_args(argv: list[str]) -> tuple[argparse.Namespace, Recipe]:
-    """The run's arguments and the recipe they ask for: ``--recipe`` first, then that recipe's flags."""
-    first = argparse.ArgumentParser(add_help=False)
-    first.add_argument("--recipe", default="state")
-    chosen = get_recipe(first.parse_known_args(argv)[0].recipe)
-    p = argparse.ArgumentParser(prog="colorsort-baseline", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--recipe", default="state", help=f"the preset to start from, one of {list(RECIPES)}")
-    p.add_argument("--list", action="store_true", help="print the recipes and exit")
-    p.add_argument("--workers", type=int, default=2, help="collection processes")
-    p.add_argument("--envs", type=int, default=2, help="evaluation processes")
-    p.add_argument("--out", help="working folder (default outputs/baselines/<recipe>)")
-    p.add_argument("--until", default="eval", choices=UNTIL, help="the last stage to run")
-    p.add_argument("--ship", help="copy the largest set's policy here with its scores and a README")
-    p.add_argument("--add-to", help="add this run's training seeds to the baseline shipped in this folder (the "
-                   "same recipe and flags but --training.seeds); its policy stays")
-    p.add_argument("--fresh", action="store_true", help="delete OUT first instead of reusing its finished stages")
-    add_recipe_flags(p, chosen)
-    args = p.parse_args(argv)
-    return args, chosen.override(recipe_changes(args, chosen))
+@dataclass(frozen=True)
+class BaselineCommandConfig:
+    """``colorsort-baseline``'s settings: the run's, then the recipe's sections, each field a flag whose default is
+    the chosen recipe's value (``--recipe camera --help`` shows camera's)."""
+
+    recipe: str = "state"  # the preset to start from (--list)
+    list: bool = False  # print the recipes and exit
+    workers: int = RunConfig.workers  # collection processes
+    envs: int = RunConfig.envs  # evaluation processes
+    out: str | None = None  # working folder (default outputs/baselines/<recipe>)
+    until: str = RunConfig.until  # the last stage to run: data, train or eval
+    ship: str | None = None  # copy the largest set's policy here with its scores and a README
+    # add this run's training seeds to the baseline shipped in this folder (the same recipe and flags but
+    # --training.seeds); its policy stays
+    add_to: str | None = None
+    fresh: bool = False  # delete OUT first instead of reusing its finished stages
+    demos: DemosConfig = field(default_factory=DemosConfig)
+    policy: PolicyConfig = SMALL_ACT
+    training: TrainingConfig = field(default_factory=TrainingConfig)
+    dagger: DaggerConfig = field(default_factory=DaggerConfig)
+    evaluation: EvaluationConfig = field(default_factory=EvaluationConfig)
+
+    def __post_init__(self) -> None:
+        if self.until not in UNTIL:
+            raise ConfigError(f"--until {self.until!r}: valid stages are {list(UNTIL)}")
+        if self.ship and self.add_to:
+            raise ConfigError("--ship makes a new baseline, --add-to adds seeds to a shipped one: give one of them")
+
+    def chosen(self) -> Recipe:
+        """The recipe to run: the preset named ``recipe`` with these sections (its checks run again)."""
+        return replace(get_recipe(self.recipe), **{s: getattr(self, s) for s in SECTIONS})
+
+    @staticmethod
+    def of(recipe: Recipe) -> BaselineCommandConfig:
+        """The settings whose defaults are ``recipe``'s own."""
+        return BaselineCommandConfig(recipe=recipe.name, **{s: getattr(recipe, s) for s in SECTIONS})
+
+
+# a perturbation is also a flag of its own, as before the command was its configuration (--demos.late_pick=10)
+SPELLING = Spelling(members={f"demos.{name}": ("demos.perturbations", kind.parse)
+                             for name, kind in PERTURBATIONS.items()})
+
+
+def recipe_named(argv: list[str]) -> str:
+    """The ``--recipe`` that ``argv`` names (its last), else the one its ``--config_path`` file names, else the
+    default's."""
+    name = BaselineCommandConfig.recipe
+    for k, token in enumerate(argv):
+        path = token.partition("=")[2] if token.startswith("--config_path=") else (
+            argv[k + 1] if token == "--config_path" and k + 1 < len(argv) else None)
+        if path:
+            with open(path, encoding="utf-8") as f:
+                name = str((draccus.cfgparsing.load_config(f, file=path) or {}).get("recipe", name))
+    for k, token in enumerate(argv):
+        if token.startswith("--recipe="):
+            name = token.partition("=")[2]
+        elif token == "--recipe" and k + 1 < len(argv):
+            name = argv[k + 1]
+    return name
+
+
+def parse_args(argv: list[str]) -> BaselineCommandConfig:
+    """The run's settings, the chosen recipe's values the defaults of its sections' flags."""
+    defaults = BaselineCommandConfig.of(get_recipe(recipe_named(argv)))  # ConfigError naming the recipes
+    perturbations = "\n".join(f"  --demos.{name}={kind.metavar}  {kind.help}" for name, kind in PERTURBATIONS.items())
+    return parse_config(BaselineCommandConfig, argv, prog="colorsort-baseline", description=__doc__,
+                        defaults=defaults, spelling=SPELLING,
+                        epilog="the demonstrator's perturbations, one flag each (or "
+                               f"--demos.perturbations=[NAME:VALUE,...]):\n{perturbations}")
+
+
+def chosen_recipe(argv: list[str]) -> Recipe:
+    """The recipe ``argv`` asks for: the preset ``--recipe`` names with its sections' flags."""
+    return parse_args(argv).chosen()
 
 
 def describe(recipe: Recipe) -> str:
@@ -79,7 +141,8 @@ def describe(recipe: Recipe) -> str:
 @guarded("colorsort-baseline")
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    args, recipe = parse_args(argv)
+    args = parse_args(argv)
+    recipe = args.chosen()
     if args.list:
         width, label_width = max(map(len, RECIPES)), max(len(r.label) for r in RECIPES.values())
         for r in RECIPES.values():
@@ -88,8 +151,6 @@ def main(argv: list[str] | None = None) -> int:
     settings = RunConfig(Path(args.out or f"outputs/baselines/{recipe.name}"), args.workers, args.envs, args.until)
     ship_to = Path(args.ship) if args.ship else None
     add_to = Path(args.add_to) if args.add_to else None
-    if ship_to and add_to:
-        raise ConfigError("--ship makes a new baseline, --add-to adds seeds to a shipped one: give one of them")
     if ship_to and ship_to.exists() and any(ship_to.iterdir()):
         raise DataExistsError(f"{ship_to} exists: remove it first, ship elsewhere, or add seeds with --add-to")
     if add_to:

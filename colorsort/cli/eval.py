@@ -41,24 +41,24 @@ Exit status 0 when it ran, 1 when it failed or was interrupted, 2 for bad argume
 
 from __future__ import annotations
 
-import argparse
 import json
 import shlex
 import shutil
 import sys
 import time
-from dataclasses import asdict
+from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 from colorsort.benchmark.evaluate import Evaluation, observation_settings, run_evaluation
 from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
-from colorsort.benchmark.report_page import SUCCESSES_FILMED, choose_films, write_report
+from colorsort.benchmark.report_page import choose_films, write_report
 from colorsort.benchmark.shift_sweep import format_sweep, run_sweep, sweep_arms, sweep_rows
+from colorsort.cli.config_args import Spelling, parse_config
 from colorsort.cli.run import guarded
 from colorsort.errors import ConfigError
-from colorsort.executors.base import DEFAULT_SHARD_SIZE, EXECUTORS, ExecutorConfig
+from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
 from colorsort.results import machine
 from colorsort.shifts import GROUPS, LEVELS, SHIFTS, parse_shifts
@@ -67,55 +67,96 @@ from colorsort.variants import SHIFT_SEEDS, VARIANTS, get_variant
 BACKENDS = ("cpu", "warp")  # the warp backend is imported only when chosen: the default install has no warp
 
 
+@dataclass(frozen=True)
+class ReportConfig:
+    """``--report.*``: the page a browser opens from disk."""
+
+    dir: str | None = None  # write a report page here: DIR/index.html, its videos and DIR/report.json
+    # episodes filmed per variant, failures first (None: every failure and 3 successes; 0: none)
+    videos: int | None = None
+    overwrite: bool = False  # replace an existing report folder
+
+    def __post_init__(self) -> None:
+        if self.videos is not None and self.videos < 0:
+            raise ConfigError(f"--videos {self.videos}: give 0 or more (--report.videos)")
+        if self.videos is not None and self.dir is None:
+            raise ConfigError("--videos: films go into a report; give --report DIR (--report.dir)")
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """``--sweep.*``: the control and every shift at every level on the same seeds, one table."""
+
+    run: bool = False  # run the sweep (--sweep) instead of one evaluation
+    shifts: tuple[str, ...] = ()  # the shifts to sweep (default: every shift); --sweep-shifts
+    levels: tuple[int, ...] = (1, 2, 3)  # the levels to sweep; --levels
+    side_episodes: int | None = None  # episodes at levels other than 2 (default: --episodes); --side-episodes
+
+    def __post_init__(self) -> None:
+        if not self.levels or any(v not in LEVELS[1:] for v in self.levels):
+            raise ConfigError(f"--levels {','.join(map(str, self.levels))}: give comma-separated levels from "
+                              f"{list(LEVELS[1:])}")
+
+
+@dataclass(frozen=True)
+class EvalCommandConfig:
+    """``colorsort-eval``'s settings: every field is a flag (``--episodes 50``, ``--report.dir=DIR``)."""
+
+    policy: str = "expert"  # expert, random, or a LeRobot checkpoint folder
+    variant: str = "default"  # a variant name (see --list), or all
+    episodes: int = 10  # episodes to run
+    seed: int | None = None  # first seed (default: the variant's evaluation seeds)
+    image_size: int | None = None  # square camera images [px] (default: a checkpoint's own, else 128)
+    # comma-separated cameras or 'none' (default: those a checkpoint was trained on, else scene,wrist)
+    cameras: str | None = None
+    episode_length: int | None = None  # steps before an episode is truncated (default: the variant's time limit)
+    # where the episodes run and how many at once (--envs N is --executor.workers N; --executor ray is
+    # --executor.name ray): each in its own process or Ray task, the same numbers whatever N
+    executor: ExecutorConfig = field(default_factory=ExecutorConfig)
+    shard_size: int = DEFAULT_SHARD_SIZE  # episodes per job, at most (fewer where that keeps every worker busy)
+    json: str | None = None  # write the metrics as JSON here
+    backend: str = "cpu"  # cpu: the CPU cell (the reference); warp: the batched cell on MuJoCo Warp (docs/gpu.md)
+    device: str | None = None  # --backend warp: Warp's device, cuda:0 (default) or cpu
+    # held-out shifts NAME:LEVEL, level 0-3 (all:L: every shift; see --list-shifts); --shift given twice adds
+    shift: tuple[str, ...] = ()
+    report: ReportConfig = field(default_factory=ReportConfig)
+    sweep: SweepConfig = field(default_factory=SweepConfig)
+    list: bool = False  # print the variants, one per line, and exit
+    list_shifts: bool = False  # print every held-out shift, its levels in units and its training range, and exit
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise ConfigError(f"--episodes {self.episodes}: give at least 1")
+        if self.backend not in BACKENDS:
+            raise ConfigError(f"--backend {self.backend!r}: valid backends are {list(BACKENDS)}")
+        if self.device is not None and self.backend != "warp":
+            raise ConfigError("--device: only --backend warp runs on a chosen device")
+        if self.backend == "warp" and self.executor.name != "local":
+            raise ConfigError("--backend warp runs on one device, not on an --executor")
+        if self.sweep.run and (self.shift or self.report.dir or self.variant == "all" or self.backend != "cpu"):
+            raise ConfigError("--sweep runs its own arms on one variant, on the CPU cell: leave out --shift, --report,"
+                              " --variant all and --backend warp")
+
+
+# flags as they were written before the command was its configuration (docs/evaluation.md): both forms work
+SPELLING = Spelling(renamed={"--envs": "--executor.workers", "--executor": "--executor.name",
+                             "--address": "--executor.address", "--retries": "--executor.retries",
+                             "--report": "--report.dir", "--videos": "--report.videos",
+                             "--overwrite": "--report.overwrite=true", "--sweep": "--sweep.run=true",
+                             "--sweep-shifts": "--sweep.shifts", "--levels": "--sweep.levels",
+                             "--side-episodes": "--sweep.side_episodes"})
+
+
+def parse_args(argv: list[str]) -> EvalCommandConfig:
+    """``argv`` as ``colorsort-eval``'s configuration; ``--help`` prints every field and exits."""
+    return parse_config(EvalCommandConfig, argv, prog="colorsort-eval", description=__doc__, spelling=SPELLING)
+
+
 @guarded("colorsort-eval")
 def main(argv: list[str] | None = None) -> int:
     quiet_robosuite_info()
-    parser = argparse.ArgumentParser(prog="colorsort-eval", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--policy", default="expert", help="expert, random, or a LeRobot checkpoint folder")
-    parser.add_argument("--variant", default="default", help="a variant name (see --list), or all")
-    parser.add_argument("--episodes", type=int, default=10, help="episodes to run")
-    parser.add_argument("--seed", type=int, default=None, help="first seed (default: the variant's seeds)")
-    parser.add_argument("--image-size", type=int, default=None,
-                        help="square camera images [px] (default: a checkpoint's own, else 128)")
-    parser.add_argument("--cameras", default=None,
-                        help="comma-separated cameras or 'none' (default: those a checkpoint was trained on, "
-                             "else scene,wrist)")
-    parser.add_argument("--episode-length", type=int, default=None,
-                        help="steps before an episode is truncated (default: the variant's time limit)")
-    parser.add_argument("--envs", type=int, default=1,
-                        help="episodes run at once, each in its own process or Ray task (same numbers whatever N)")
-    parser.add_argument("--executor", default="local", choices=EXECUTORS,
-                        help="local: processes on this machine; ray: a Ray cluster (see --address)")
-    parser.add_argument("--address", default=None,
-                        help="ray: the cluster to join, e.g. auto (default: start one on this machine)")
-    parser.add_argument("--shard-size", type=int, default=DEFAULT_SHARD_SIZE,
-                        help="episodes per job, at most (fewer where that keeps every worker busy)")
-    parser.add_argument("--retries", type=int, default=2, help="times a job runs again after its process died")
-    parser.add_argument("--json", default=None, help="write the metrics as JSON here")
-    parser.add_argument("--report", default=None,
-                        help="write a report page here: DIR/index.html, its videos and DIR/report.json")
-    parser.add_argument("--videos", type=int, default=None,
-                        help="--report: episodes filmed per variant, failures first (default: every failure and "
-                             f"{SUCCESSES_FILMED} successes; 0: none)")
-    parser.add_argument("--overwrite", action="store_true", help="--report: replace an existing report folder")
-    parser.add_argument("--backend", default="cpu", choices=BACKENDS,
-                        help="cpu: the CPU cell (the reference); warp: the batched cell on MuJoCo Warp (docs/gpu.md)")
-    parser.add_argument("--device", default=None,
-                        help="--backend warp: Warp's device, cuda:0 (default) or cpu")
-    parser.add_argument("--shift", action="append", default=None, metavar="NAME:LEVEL",
-                        help="a held-out shift at a level 0-3, repeatable (all:L: every shift); see --list-shifts")
-    parser.add_argument("--sweep", action="store_true",
-                        help="the control and every shift at every level, on the same seeds: one table")
-    parser.add_argument("--sweep-shifts", default=None,
-                        help="--sweep: comma-separated shifts to sweep (default: every shift)")
-    parser.add_argument("--levels", default="1,2,3", help="--sweep: comma-separated levels (default: 1,2,3)")
-    parser.add_argument("--side-episodes", type=int, default=None,
-                        help="--sweep: episodes at levels other than 2 (default: --episodes)")
-    parser.add_argument("--list", action="store_true", help="print the variants, one per line, and exit")
-    parser.add_argument("--list-shifts", action="store_true",
-                        help="print every held-out shift, its group and levels in units, and exit")
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = parse_args(argv)
     if args.list:
         for v in VARIANTS.values():
             print(f"{v.name:<14} {v.gym_id:<34} {v.description}")
@@ -123,42 +164,28 @@ def main(argv: list[str] | None = None) -> int:
     if args.list_shifts:
         print(list_shifts())
         return 0
-    if args.episodes < 1:
-        parser.error(f"--episodes {args.episodes}: give at least 1")
-    if args.envs < 1:
-        parser.error(f"--envs {args.envs}: give at least 1")
-    if args.videos is not None and args.videos < 0:
-        parser.error(f"--videos {args.videos}: give 0 or more")
-    if args.videos is not None and args.report is None:
-        parser.error("--videos: films go into a report; give --report DIR")
-    if args.report and Path(args.report).exists() and any(Path(args.report).iterdir()) and not args.overwrite:
-        parser.error(f"--report {args.report} exists and is not empty; pass --overwrite to replace it")
-    if args.device is not None and args.backend != "warp":
-        parser.error("--device: only --backend warp runs on a chosen device")
-    if args.backend == "warp" and args.executor != "local":
-        parser.error("--backend warp runs on one device, not on an --executor")
-    shift = tuple(str(s) for s in parse_shifts(args.shift))  # ValueError (exit 2) naming the valid shifts
-    if args.sweep and (shift or args.report or args.variant == "all" or args.backend != "cpu"):
-        parser.error("--sweep runs its own arms on one variant, on the CPU cell: leave out --shift, --report, "
-                     "--variant all and --backend warp")
+    report = args.report
+    if report.dir and Path(report.dir).exists() and any(Path(report.dir).iterdir()) and not report.overwrite:
+        raise ConfigError(f"--report {report.dir} exists and is not empty; pass --overwrite to replace it")
+    shift = tuple(str(s) for s in parse_shifts(list(args.shift)))  # ValueError (exit 2) naming the valid shifts
     if args.backend == "warp" and any(not s.endswith(":0") for s in shift):
         raise ConfigError(f"--backend warp: the batched cell applies no held-out shift yet (asked: {', '.join(shift)});"
                           " run them on the CPU cell (--backend cpu)")
-    executor = ExecutorConfig(args.executor, args.envs, args.retries, args.address)
+    executor = args.executor
     cameras, image_size = observation_settings(args.policy, args.cameras, args.image_size)
     names = variant_names(args.policy, args.variant)
-    if args.sweep:
-        return sweep(args, cameras, image_size, executor)
-    film = args.report is not None and args.videos != 0
+    if args.sweep.run:
+        return sweep(args, argv, cameras, image_size, executor)
+    film = report.dir is not None and report.videos != 0
     if args.backend == "warp":
         try:
             from colorsort.batched.evaluate import evaluate_batched
         except ImportError as error:
             raise ConfigError(f"--backend warp needs MuJoCo Warp ({error}): pip install -e '.[gpu]'") from error
 
-        batched = [evaluate_batched(args.policy, name, args.episodes, seed=args.seed, envs=args.envs,
+        batched = [evaluate_batched(args.policy, name, args.episodes, seed=args.seed, envs=executor.workers,
                                     device=args.device or "cuda:0", episode_length=args.episode_length, film=film,
-                                    videos=args.videos) for name in names]
+                                    videos=report.videos) for name in names]
         evaluation = Evaluation([b.report for b in batched],
                                 {(b.report.variant, seed): video for b in batched for seed, video in b.films.items()})
     else:
@@ -173,12 +200,12 @@ def main(argv: list[str] | None = None) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(payload, indent=1))
         print(f"metrics: {args.json}")
-    if args.report:
-        if args.overwrite:
-            shutil.rmtree(args.report, ignore_errors=True)
-        kept = choose_films(reports, evaluation.films, args.videos)
-        command = shlex.join(["colorsort-eval", *(sys.argv[1:] if argv is None else argv)])
-        page = write_report(args.report, reports, kept, payload, command)
+    if report.dir:
+        if report.overwrite:
+            shutil.rmtree(report.dir, ignore_errors=True)
+        kept = choose_films(reports, evaluation.films, report.videos)
+        command = shlex.join(["colorsort-eval", *argv])
+        page = write_report(report.dir, reports, kept, payload, command)
         print(f"report: {page} ({len(kept)} videos)")
     return 0
 
@@ -197,26 +224,23 @@ def list_shifts() -> str:
     return "\n".join(lines)
 
 
-def sweep(args: argparse.Namespace, cameras: tuple[str, ...], image_size: tuple[int, int],
+def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], image_size: tuple[int, int],
           executor: ExecutorConfig) -> int:
     """``--sweep``: the control and every shift at every level on the same seeds; prints the table."""
-    levels = tuple(int(v) for v in args.levels.split(",") if v.strip().isdigit())
-    if not levels or len(levels) != len([v for v in args.levels.split(",") if v.strip()]):
-        raise ConfigError(f"--levels {args.levels!r}: give comma-separated levels from {list(LEVELS[1:])}")
-    names = tuple(n.strip() for n in args.sweep_shifts.split(",") if n.strip()) if args.sweep_shifts else None
-    arms = sweep_arms(args.episodes, args.side_episodes or args.episodes, levels, names)
+    arms = sweep_arms(args.episodes, args.sweep.side_episodes or args.episodes, args.sweep.levels,
+                      args.sweep.shifts or None)
     start = time.perf_counter()
     reports = run_sweep(args.policy, args.variant, arms, image_size=image_size, cameras=cameras,
                         episode_length=args.episode_length, executor=executor, shard_size=args.shard_size)
     wall = time.perf_counter() - start
     rows = sweep_rows(reports)
     print(format_sweep(args.policy, args.variant, rows))
-    print(f"{sum(a.episodes for a in arms)} episodes in {wall / 60:.1f} min ({args.executor}, {args.envs} envs)")
+    print(f"{sum(a.episodes for a in arms)} episodes in {wall / 60:.1f} min ({executor.name}, {executor.workers} envs)")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         payload = {"policy": args.policy, "variant": args.variant, "seeds": list(SHIFT_SEEDS[: args.episodes]),
-                   "command": shlex.join(["colorsort-eval", *sys.argv[1:]]), "wall_s": round(wall, 1),
-                   "executor": args.executor, "envs": args.envs, "machine": machine(),
+                   "command": shlex.join(["colorsort-eval", *argv]), "wall_s": round(wall, 1),
+                   "executor": executor.name, "envs": executor.workers, "machine": machine(),
                    "written": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                    "rows": rows, "reports": [asdict(r) for r in reports]}
         Path(args.json).write_text(json.dumps(payload, indent=1))

@@ -71,7 +71,7 @@ def collect(config: CollectConfig, progress: bool = True, log: Callable[[str], N
     start = time.perf_counter()
     root = Path(config.out).resolve()
     staging = store.StagingRun.open(config, root, log)
-    summary = CollectSummary(str(root), config.repo_id, config.executor, shards_kept=len(staging.shards()))
+    summary = CollectSummary(str(root), config.repo_id, config.executor.name, shards_kept=len(staging.shards()))
     todo = plan(staging)
     if staging.marker and not todo and not summary.shards_kept:
         staging.discard()
@@ -125,11 +125,11 @@ class _Progress:
 def record_shards(staging: store.StagingRun, todo: list[int], summary: CollectSummary, progress: bool) -> None:
     """Record ``todo`` in shards on the configured executor; each finished shard lands in the staging folder."""
     config = staging.config
-    blocks = chunks(todo, config.shard_size, config.workers)
+    blocks = chunks(todo, config.shard_size, config.executor.workers)
     tasks = [Task(shard_name(b[0]), record, ShardJob(config, tuple(b), str(staging.folder / shard_name(b[0])),
                                                        staging.run)) for b in blocks]
     summary.shards = len(tasks)
-    executor = make_executor(config.executor_config, PRELOAD, forwarded_env(RECORDING_ENVIRONMENT))
+    executor = make_executor(config.executor, PRELOAD, forwarded_env(RECORDING_ENVIRONMENT))
     bar = _Progress(summary, len(todo), len(tasks), progress)
     try:
         results = executor.run(tasks, bar.on_episode, bar.on_shard) if tasks else []
@@ -152,7 +152,7 @@ def merge_and_publish(staging: store.StagingRun) -> None:
     reports = [report_of(p, m) for p, m in shards]
     if any(s.kept for s in reports):
         sources = ([staging.root] if marker else []) + [Path(s.root) for s in reports if s.kept]
-        merger = merge if config.executor == "local" and config.workers == 1 else merge_in_child
+        merger = merge if config.executor.name == "local" and config.executor.workers == 1 else merge_in_child
         merger(sources, staging.merged, config.repo_id)
         kept = (marker["episodes"] if marker else []) + [i for s in reports for i in s.kept]
         layout = next((s.sim_state for s in reports if s.sim_state), None)

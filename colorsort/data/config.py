@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
@@ -39,11 +39,9 @@ class CollectConfig:
     cameras: tuple[str, ...] = DEFAULT_CAMERAS  # stored as observation.images.<camera>; () records state only
     image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE  # (height, width) of every camera [px]
     fps: int = 20  # frames per second = the env's control rate [Hz]
-    workers: int = 1  # shards recorded side by side (local processes, or Ray tasks of 1 CPU)
-    executor: str = "local"  # "local" (processes on this machine) or "ray" (executors.base.EXECUTORS)
+    # which engine records the shards and how many at once (--executor.name local or ray, --executor.workers N)
+    executor: ExecutorConfig = field(default_factory=ExecutorConfig)
     shard_size: int = DEFAULT_SHARD_SIZE  # episodes per shard, at most (fewer where needed to busy every worker)
-    retries: int = 2  # re-runs of a shard whose worker process died
-    address: str | None = None  # ray only: the cluster to join ("auto"); None starts one on this machine
     vcodec: str = "h264"  # video codec of the camera streams (bench_collect.py --vcodec compares them)
     # the demonstrator's perturbations (data.perturbations: late_pass, late_pick, brightness); kept in name order
     perturbations: tuple[Perturbation, ...] = ()
@@ -73,7 +71,6 @@ class CollectConfig:
         check_vcodec(self.vcodec)
         check_range("episodes", self.episodes, 1, 1_000_000)
         check_range("boxes_per_episode", self.boxes_per_episode, 1, 100)
-        self.executor_config  # noqa: B018 - validates executor, workers, retries and address
         check_range("shard_size", self.shard_size, 1, 100_000)
         object.__setattr__(self, "perturbations", canonical(self.perturbations))
         variant = get_variant(self.variant) if self.variant else None
@@ -102,10 +99,6 @@ class CollectConfig:
             settings["shift"] = shift_label(parse_shifts(self.shift))
         settings.update({p.name: p.settings() for p in self.perturbations})
         return settings
-
-    @property
-    def executor_config(self) -> ExecutorConfig:
-        return ExecutorConfig(self.executor, self.workers, self.retries, self.address)
 
     @property
     def expert_config(self) -> ExpertConfig:

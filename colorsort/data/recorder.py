@@ -17,13 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import judge
-from colorsort.cell.rollout import CellEpisode, Observer, Step, Stopped, rollout
 from colorsort.config import sorting_time_limit
 from colorsort.data.config import CollectConfig
 from colorsort.data.perturbations import perturbed
-from colorsort.data.schema import features, frame, task_text
+from colorsort.envs.robosuite_task import ColorSort
+from colorsort.envs.rollout import CellEpisode, Observer, Step, Stopped, rollout
+from colorsort.envs.schema import features, frame, task_text
 from colorsort.executors.base import held_interrupts
 from colorsort.expert.base import Expert
 from colorsort.expert.factory import make_expert
@@ -139,7 +139,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
         robot_type=config.robot, use_videos=True, video_backend="pyav",
         rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec), streaming_encoding=True, encoder_queue_maxsize=10_000,
-        encoder_threads=1 if config.workers > 1 or config.executor != "local" else None,
+        encoder_threads=1 if config.executor.workers > 1 or config.executor.name != "local" else None,
     )
     sec["setup"] += time.perf_counter() - t0
     limit = episode_time_limit(config)

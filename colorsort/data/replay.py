@@ -18,12 +18,12 @@ from tqdm import tqdm
 
 from colorsort.cell import sim_state
 from colorsort.cell.cameras import CAMERAS
-from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import judge
 from colorsort.data.config import CollectConfig
-from colorsort.data.schema import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
 from colorsort.data.store import MARKER
 from colorsort.data.video import VideoWriter, contact_sheet, save_png
+from colorsort.envs.robosuite_task import ColorSort
+from colorsort.envs.schema import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
 from colorsort.errors import ConfigError
 
 # re-rendered vs decoded frames, worst frame: measured 26.6 dB at 64 px, 29.1 dB at 128 px (h264, crf 30)

@@ -19,7 +19,7 @@ from colorsort.config import CellLayout
 from colorsort.expert.perception import CameraModel
 
 if TYPE_CHECKING:
-    from colorsort.cell.env import ColorSort
+    from colorsort.envs.robosuite_task import ColorSort
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from colorsort.expert.tracking import TrackingExpert
 __all__ = ["expert_preset", "make_expert"]
 
 if TYPE_CHECKING:
-    from colorsort.cell.env import ColorSort
+    from colorsort.envs.robosuite_task import ColorSort
 
 
 def make_expert(env: ColorSort, config: ExpertConfig | None = None) -> Expert:

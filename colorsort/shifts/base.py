@@ -31,7 +31,7 @@ GROUPS: tuple[str, ...] = ("viewpoint", "appearance", "objects", "dynamics", "la
 
 
 class Cell(Protocol):
-    """What shifts reach of a ``Cell`` env (``cell/env.py``): its model and data, plant, arm and settings."""
+    """What shifts reach of a ``Cell`` env (``envs/robosuite_task.py``): its model and data, plant, arm and settings."""
 
     config: TaskConfig
     layout: CellLayout

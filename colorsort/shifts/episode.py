@@ -1,7 +1,7 @@
 """An env's held-out shifts (``CellShifts``) and one episode's (``EpisodeShift``): the model restored as built, then
 each shift drawn and applied.
 
-``ColorSort`` (``cell/env.py``) holds a ``CellShifts``, whose ``begin`` restores the cell and builds an
+``ColorSort`` (``envs/robosuite_task.py``) holds a ``CellShifts``, whose ``begin`` restores the cell and builds an
 ``EpisodeShift`` at every reset, after robosuite reset the arm and before the first box is spawned; the env then
 passes each new box (``edit_spawn``), each rendered image (``image``) and each action (``action``) through it.
 Every shift draws from its own generator, seeded from the episode's seed and the shift's name, so a shift draws the

@@ -18,30 +18,26 @@ class DaggerConfig:
     records a round's labels). Each round trains a new policy from scratch on the demos and every round's labels,
     for the recipe's updates and seeds (or, with ``retrain="finetune"``, trains the policy that played further);
     the last round's policy is the one scored. Only the largest demo set runs rounds.
-
-    Attributes:
-        rounds: rounds after the first training; 0: behaviour cloning alone.
-        episodes: episodes the policy plays per round on each training variant (the expert finishes each; those
-            it finishes with every box right are kept).
-        handover: [steps] (first, last): the policy acts for a number of steps drawn from this range in each
-            episode before the expert takes over.
-        rollout: which checkpoint of a round's policy plays: "last", or "chosen", the one validation seeds
-            choose (``evaluation.select_episodes``) as for scoring; a policy's checkpoints can differ by more
-            than the methods do.
-        retrain: how a round's policy is trained on the grown set: "scratch", a new policy from scratch; "finetune",
-            the weights of the checkpoint that played trained further (``lerobot-train --policy.path``; the
-            optimizer starts afresh).
-        updates: [updates] each round's training; 0: as many as the first training's (the recipe's).
-        variants: the training variants the policy plays in each round (their labels join the set); empty: every
-            training variant. A variant keeps its takeover seeds whichever others are played.
     """
 
+    # rounds after the first training; 0: behaviour cloning alone.
     rounds: int = 0
+    # episodes the policy plays per round on each training variant (the expert finishes each; those it finishes with
+    # every box right are kept).
     episodes: int = 10
+    # [steps] (first, last): the policy acts for a number of steps drawn from this range in each episode before the
+    # expert takes over.
     handover: tuple[int, int] = (20, 200)
+    # which checkpoint of a round's policy plays: "last", or "chosen", the one validation seeds choose
+    # (``evaluation.select_episodes``) as for scoring; a policy's checkpoints can differ by more than the methods do.
     rollout: str = "last"
+    # how a round's policy is trained on the grown set: "scratch", a new policy from scratch; "finetune", the weights of
+    # the checkpoint that played trained further (``lerobot-train --policy.path``; the optimizer starts afresh).
     retrain: str = "scratch"
+    # [updates] each round's training; 0: as many as the first training's (the recipe's).
     updates: int = 0
+    # the training variants the policy plays in each round (their labels join the set); empty: every training variant. A
+    # variant keeps its takeover seeds whichever others are played.
     variants: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:

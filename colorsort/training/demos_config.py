@@ -21,35 +21,32 @@ def at_least_one(section: object, *names: str) -> None:
 
 @dataclass(frozen=True)
 class DemosConfig:
-    """The expert's demos a baseline learns from (``colorsort-collect`` once per training variant, merged).
+    """The expert's demos a baseline learns from (``colorsort-collect`` once per training variant, merged)."""
 
-    Attributes:
-        train_mix: (variant, weight) pairs: each demo count is split over the variants in proportion.
-        counts: increasing demo counts; the largest trains the shipped policy.
-        boxes_per_episode: boxes that leave the belt in one demo.
-        boxes_by_variant: (variant, boxes) pairs for training variants whose demos hold another number of boxes.
-        cameras: cameras recorded and read by the policy; () for a policy that reads the box state instead.
-        image_size: square camera images [px].
-        perturbations: the demonstrator's perturbations (``colorsort.data.perturbations``), each given to the
-            training variants it applies to.
-        turn_to_box: the expert turns the cup to a turned box; False: it keeps its home yaw.
-        expert: the expert's settings changed from its belt's preset, (name, value) pairs of ``ExpertConfig``
-            fields (``colorsort.expert.config.CHANGEABLE``), for the demos and DAgger's labels alike, e.g.
-            press:0.01,track_hold_time:0.15.
-        shift: held-out shifts' training ranges every demo is recorded with, drawn per episode
-            (``colorsort.shifts``), e.g. all:train; a held-out level (1-3) is refused, naming it.
-    """
-
+    # (variant, weight) pairs: each demo count is split over the variants in proportion.
     train_mix: tuple[tuple[str, float], ...] = (("default", 1.0), ("jitter", 1.0), ("fast", 1.0),
                                                 ("distractors", 1.0))
+    # increasing demo counts; the largest trains the shipped policy.
     counts: tuple[int, ...] = (8, 40, 200)
+    # boxes that leave the belt in one demo.
     boxes_per_episode: int = 3
+    # (variant, boxes) pairs for training variants whose demos hold another number of boxes.
     boxes_by_variant: tuple[tuple[str, int], ...] = ()
+    # cameras recorded and read by the policy; () for a policy that reads the box state instead.
     cameras: tuple[str, ...] = ()
+    # square camera images [px].
     image_size: int = 64
+    # the demonstrator's perturbations (``colorsort.data.perturbations``), each given to the training variants it
+    # applies to.
     perturbations: tuple[Perturbation, ...] = ()
+    # the expert turns the cup to a turned box; False: it keeps its home yaw.
     turn_to_box: bool = True
+    # the expert's settings changed from its belt's preset, (name, value) pairs of ``ExpertConfig`` fields
+    # (``colorsort.expert.config.CHANGEABLE``), for the demos and DAgger's labels alike, e.g.
+    # press:0.01,track_hold_time:0.15.
     expert: tuple[tuple[str, float], ...] = ()
+    # held-out shifts' training ranges every demo is recorded with, drawn per episode (``colorsort.shifts``), e.g.
+    # all:train; a held-out level (1-3) is refused, naming it.
     shift: str = ""
 
     def __post_init__(self) -> None:

@@ -36,6 +36,7 @@ from pathlib import Path
 
 from colorsort.data.config import CollectConfig
 from colorsort.errors import DataConflictError, StageError
+from colorsort.executors.base import ExecutorConfig
 from colorsort.expert.config import changes_text
 from colorsort.training import cache
 from colorsort.training.recipes import Recipe
@@ -103,7 +104,7 @@ def collect_config(recipe: Recipe, variant: str, k: int, count: int, workers: in
     demos, v = recipe.demos, get_variant(variant)
     return CollectConfig(episodes=count, boxes_per_episode=demos.boxes(variant), preset=v.preset, robot=v.robot,
                          variant=variant, seed=SEED_STRIDE * k, repo_id=REPO_ID, cameras=demos.cameras,
-                         image_size=(demos.image_size, demos.image_size), workers=workers,
+                         image_size=(demos.image_size, demos.image_size), executor=ExecutorConfig(workers=workers),
                          perturbations=demos.perturbations_on(variant), turn_to_box=demos.turn_to_box,
                          expert=demos.expert, shift=demos.shift)
 
@@ -113,7 +114,7 @@ def command_of(config: CollectConfig) -> list[str]:
     return ([str(BIN / "colorsort-collect"), "--variant", str(config.variant), "--episodes", str(config.episodes),
              "--boxes-per-episode", str(config.boxes_per_episode), "--seed", str(config.seed),
              "--cameras", ",".join(config.cameras) or "none", "--image-size", str(config.image_size[0]),
-             "--workers", str(config.workers), "--repo-id", config.repo_id]
+             "--workers", str(config.executor.workers), "--repo-id", config.repo_id]
             + [f"--{p.name.replace('_', '-')}={p.text}" for p in config.perturbations]
             + ([] if config.turn_to_box else ["--no-turn"])
             + ([f"--expert={changes_text(config.expert)}"] if config.expert else [])

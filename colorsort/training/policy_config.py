@@ -11,7 +11,9 @@ Both kinds answer the same questions, so the pipeline never asks which one it ho
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
+
+import draccus
 
 from colorsort.errors import ConfigError
 
@@ -33,24 +35,51 @@ def _text(value: object) -> str:
 
 
 @dataclass(frozen=True)
-class ActConfig:
+class PolicyConfig(draccus.ChoiceRegistry):
+    """A policy a recipe trains; ``--policy.type`` picks the kind (``act``, ``diffusion``), as on ``lerobot-train``."""
+
+    @property
+    def type(self) -> str:
+        """``lerobot-train --policy.type``."""
+        return str(self.get_choice_name(type(self)))
+
+    @property
+    def execution(self) -> str:
+        """How its action chunks are executed, for file names."""
+        raise NotImplementedError
+
+    def inference(self) -> dict[str, float | int | str | None]:
+        """The settings that change how a trained policy acts but not what it learns."""
+        raise NotImplementedError
+
+    def args(self, image_size: int) -> list[str]:
+        """``lerobot-train``'s ``--policy.*`` arguments (and any optimizer ones) for images of ``image_size`` px."""
+        raise NotImplementedError
+
+    def describe(self, parameters: int) -> str:
+        """One sentence of a shipped policy's README: its size and how it acts."""
+        raise NotImplementedError
+
+
+@PolicyConfig.register_subclass("act")
+@dataclass(frozen=True)
+class ActConfig(PolicyConfig):
     """LeRobot ACT settings, passed to ``lerobot-train`` as ``--policy.<name>=<value>``."""
 
-    dim_model: int = 128
-    dim_feedforward: int = 512
-    n_heads: int = 4
-    n_encoder_layers: int = 2
-    n_decoder_layers: int = 1
+    dim_model: int = 128  # the transformer's width (LeRobot's 512)
+    dim_feedforward: int = 512  # its feed-forward layers' width (LeRobot's 3200)
+    n_heads: int = 4  # attention heads (LeRobot's 8)
+    n_encoder_layers: int = 2  # transformer encoder layers (LeRobot's 4)
+    n_decoder_layers: int = 1  # transformer decoder layers (LeRobot's 1)
     chunk_size: int = 20  # actions predicted per inference [steps of 50 ms]
     n_action_steps: int = 10  # actions executed open-loop per inference (1 with temporal ensembling)
     temporal_ensemble_coeff: float | None = None  # set: ACT's temporal ensembling (see TRACKING_ACT)
     use_vae: bool = False  # the expert is deterministic: one mode per state, nothing for a latent to explain
     optimizer_lr: float = DEFAULT_LR  # LeRobot's 1e-5 is tuned for a pretrained backbone; these start from scratch
-    optimizer_lr_backbone: float = DEFAULT_LR
+    optimizer_lr_backbone: float = DEFAULT_LR  # the ResNet-18's learning rate
     pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
     lr_schedule: str = "constant"  # LeRobot's ACT preset; "cosine": warm up, then anneal to 0 at the last update
     warmup_steps: int = 200  # updates of linear warm-up before the cosine [updates]
-    type: str = field(default="act", init=False)  # lerobot-train's --policy.type
 
     def __post_init__(self) -> None:
         if self.lr_schedule not in LR_SCHEDULES:
@@ -70,7 +99,7 @@ class ActConfig:
             return f"ens{self.temporal_ensemble_coeff:g}"
         return f"chunk{self.n_action_steps}"
 
-    def inference(self) -> dict[str, float | int | None]:
+    def inference(self) -> dict[str, float | int | str | None]:
         """The settings that change how a trained ACT acts but not what it learns."""
         return {"n_action_steps": self.n_action_steps, "temporal_ensemble_coeff": self.temporal_ensemble_coeff}
 
@@ -78,7 +107,7 @@ class ActConfig:
         """``lerobot-train``'s arguments for the policy, its optimizer and its learning-rate schedule.
 
         ``image_size`` [px] is unused: ACT reads its images whole."""
-        policy = {k: v for k, v in asdict(self).items() if k not in ("lr_schedule", "warmup_steps", "type")}
+        policy = {k: v for k, v in asdict(self).items() if k not in ("lr_schedule", "warmup_steps")}
         args = [f"--policy.{k}={_text(v)}" for k, v in policy.items()]
         if self.lr_schedule == "cosine":
             if self.optimizer_lr_backbone != self.optimizer_lr:
@@ -101,8 +130,9 @@ class ActConfig:
                 f"{execution}, {'a' if self.use_vae else 'no'} VAE, learning rate {self.optimizer_lr})")
 
 
+@PolicyConfig.register_subclass("diffusion")
 @dataclass(frozen=True)
-class DiffusionConfig:
+class DiffusionConfig(PolicyConfig):
     """LeRobot diffusion policy settings for small images trained from scratch on a CPU.
 
     Its image encoder is what ACT's is not: a ResNet-18 whose batch norms become GroupNorm (a working
@@ -117,9 +147,9 @@ class DiffusionConfig:
     horizon: int = 16  # actions predicted per inference [steps of 50 ms]
     n_action_steps: int = 8  # actions executed open-loop per inference
     down_dims: tuple[int, ...] = (32, 64)  # the U-Net's channels per level (LeRobot's 512, 1024, 2048: 250 M)
-    use_group_norm: bool = True
-    spatial_softmax_num_keypoints: int = 32
-    use_separate_rgb_encoder_per_camera: bool = False
+    use_group_norm: bool = True  # GroupNorm in place of the ResNet's batch norms (no pretrained statistics)
+    spatial_softmax_num_keypoints: int = 32  # image keypoints the encoder ends in
+    use_separate_rgb_encoder_per_camera: bool = False  # one encoder serves every camera (the file stays small)
     pretrained_backbone_weights: str | None = None  # ImageNet weights would be a download: none at run time
     num_inference_steps: int = 10  # denoising steps per inference (of num_train_timesteps in training)
     noise_scheduler_type: str = "DDPM"  # DDIM: deterministic denoising in few steps; the same training either way
@@ -128,7 +158,6 @@ class DiffusionConfig:
     optimizer_lr: float = DEFAULT_LR  # Adam's rate at the end of the warm-up, then annealed (cosine) to 0
     scheduler_warmup_steps: int = 500  # updates of linear warm-up [updates]
     crop_fraction: float = 0.9  # the crop's side as a fraction of the image's
-    type: str = field(default="diffusion", init=False)  # lerobot-train's --policy.type
 
     def __post_init__(self) -> None:
         if not 1 <= self.n_action_steps <= self.horizon - self.n_obs_steps + 1:
@@ -173,7 +202,7 @@ class DiffusionConfig:
     def args(self, image_size: int) -> list[str]:
         """``lerobot-train``'s arguments; LeRobot's own optimizer and schedule (Adam, cosine after a warm-up) at the
         settings' rate and warm-up."""
-        policy = {k: v for k, v in asdict(self).items() if k not in ("crop_fraction", "type")}
+        policy = {k: v for k, v in asdict(self).items() if k not in ("crop_fraction",)}
         args = [f"--policy.{k}={_text(v)}" for k, v in policy.items()]
         if self.crop_fraction < 1:
             args.append(f"--policy.crop_shape={_text([self.crop(image_size)] * 2)}")
@@ -191,8 +220,6 @@ class DiffusionConfig:
                 f"ResNet-18 with GroupNorm and a spatial softmax of {self.spatial_softmax_num_keypoints} "
                 f"keypoints, random crops of {self.crop_fraction:g} of each side)")
 
-
-PolicyConfig = ActConfig | DiffusionConfig
 
 SMALL_ACT = ActConfig()  # 0.67 M parameters without cameras; 11.9 M with the ResNet-18
 # the belt that never stops: each step's action the average of every chunk's prediction for it, the k-th weighted

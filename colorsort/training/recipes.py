@@ -54,44 +54,41 @@ SECTIONS = ("demos", "policy", "training", "dagger", "evaluation")
 
 @dataclass(frozen=True)
 class TrainingConfig:
-    """``lerobot-train``'s run: its length, seeds, batches, image augmentation and device.
+    """``lerobot-train``'s run: its length, seeds, batches, image augmentation and device."""
 
-    Attributes:
-        steps: training updates of the largest demo set.
-        small_steps: training updates of the smaller sets.
-        passes: when set, every set trains for this many passes over its frames instead
-            (updates = passes x frames / batch_size), so that a demo curve compares sets trained alike.
-        seeds: ``lerobot-train`` seeds; every set is trained (and scored) once per seed. The first seed's policy
-            is the one shipped and the one whose checkpoints make the learning curve.
-        batch_size: samples per update.
-        save_every: updates between checkpoints (the learning curve's points); 0: the last only.
-        image_shift: random shifts of every training image (LeRobot's ``RandomAffine``), up to this fraction of its
-            width and height each way; 0: off.
-        image_relight: every training image relit at random as the ``lighting`` variant relights the cell
-            (brightness, ``ColorJitter``; colour temperature 4,500-12,000 K, ``PlanckianJitter``).
-        device: ``lerobot-train``'s device: cpu, cuda or mps.
-        num_workers: ``lerobot-train``'s data-loading processes. LeRobot spawns each (each imports torch and
-            LeRobot again before the first batch); 0 loads in the training process. The random draws of the image
-            augmentation depend on it, so it is part of a run's cache key.
-        weights: how the checkpoints store their weights: float32 as ``lerobot-train`` writes them, or float16
-            (half the file; rounded before any checkpoint is validated or scored, so every score is of the stored
-            weights: ``colorsort.training.weights``).
-        average: checkpoints in each scored one: 1, ``lerobot-train``'s weights; k > 1, each checkpoint's weights the
-            mean of its own and the k - 1 saved before it (every ``save_every`` updates), as Diffusion Policy scores
-            a moving average of its weights (``colorsort.training.weights.average``).
-    """
-
+    # training updates of the largest demo set.
     steps: int = 6000
+    # training updates of the smaller sets.
     small_steps: int = 2500
+    # when set, every set trains for this many passes over its frames instead (updates = passes x frames / batch_size),
+    # so that a demo curve compares sets trained alike.
     passes: float | None = None
+    # ``lerobot-train`` seeds; every set is trained (and scored) once per seed. The first seed's policy is the one
+    # shipped and the one whose checkpoints make the learning curve.
     seeds: tuple[int, ...] = (1000,)
+    # samples per update.
     batch_size: int = 64
+    # updates between checkpoints (the learning curve's points); 0: the last only.
     save_every: int = 0
+    # random shifts of every training image (LeRobot's ``RandomAffine``), up to this fraction of its width and height
+    # each way; 0: off.
     image_shift: float = 0.0
+    # every training image relit at random as the ``lighting`` variant relights the cell (brightness, ``ColorJitter``;
+    # colour temperature 4,500-12,000 K, ``PlanckianJitter``).
     image_relight: bool = False
+    # ``lerobot-train``'s device: cpu, cuda or mps.
     device: str = "cpu"
+    # ``lerobot-train``'s data-loading processes. LeRobot spawns each (each imports torch and LeRobot again before the
+    # first batch); 0 loads in the training process. The random draws of the image augmentation depend on it, so it is
+    # part of a run's cache key.
     num_workers: int = 1
+    # how the checkpoints store their weights: float32 as ``lerobot-train`` writes them, or float16 (half the file;
+    # rounded before any checkpoint is validated or scored, so every score is of the stored weights:
+    # ``colorsort.training.weights``).
     weights: str = "float32"
+    # checkpoints in each scored one: 1, ``lerobot-train``'s weights; k > 1, each checkpoint's weights the mean of its
+    # own and the k - 1 saved before it (every ``save_every`` updates), as Diffusion Policy scores a moving average of
+    # its weights (``colorsort.training.weights.average``).
     average: int = 1
 
     def __post_init__(self) -> None:
@@ -139,26 +136,23 @@ class TrainingConfig:
 
 @dataclass(frozen=True)
 class EvaluationConfig:
-    """How the trained policies are scored (``colorsort-eval`` on each variant's fixed evaluation seeds).
+    """How the trained policies are scored (``colorsort-eval`` on each variant's fixed evaluation seeds)."""
 
-    Attributes:
-        main_variant: the variant of the headline score, the demo curve and the learning curve.
-        variants: the variants the largest set's policy is scored on.
-        episodes: evaluation episodes on ``main_variant``.
-        other_episodes: evaluation episodes on every other variant.
-        curve_episodes: episodes per learning-curve checkpoint (the main variant's first seeds).
-        select_episodes: when above 0, every checkpoint plays this many episodes of each training variant on
-            validation seeds (never the evaluation seeds), and the one that does best there is scored and shipped
-            (``colorsort.training.selection``); 0: the last checkpoint.
-        episode_length: evaluation steps before truncation (None: the variant's time limit).
-    """
-
+    # the variant of the headline score, the demo curve and the learning curve.
     main_variant: str = "default"
+    # the variants the largest set's policy is scored on.
     variants: tuple[str, ...] = IRB140_VARIANTS
+    # evaluation episodes on ``main_variant``.
     episodes: int = 50
+    # evaluation episodes on every other variant.
     other_episodes: int = 20
+    # episodes per learning-curve checkpoint (the main variant's first seeds).
     curve_episodes: int = 20
+    # when above 0, every checkpoint plays this many episodes of each training variant on validation seeds (never the
+    # evaluation seeds), and the one that does best there is scored and shipped (``colorsort.training.selection``); 0:
+    # the last checkpoint.
     select_episodes: int = 0
+    # evaluation steps before truncation (None: the variant's time limit).
     episode_length: int | None = None
 
     def __post_init__(self) -> None:
@@ -253,7 +247,7 @@ class Recipe:
         demos["perturbations"] = {p.name: p.settings() for p in self.demos.perturbations}
         if not self.demos.shift:  # a recipe without shifts reads as before they were a setting
             del demos["shift"]
-        sections = {"name": self.name, "demos": demos, "policy": asdict(self.policy),
+        sections = {"name": self.name, "demos": demos, "policy": {**asdict(self.policy), "type": self.policy.type},
                     "training": asdict(self.training), "evaluation": asdict(self.evaluation)}
         if self.dagger.rounds:  # a recipe without rounds reads as before DAgger was a setting
             sections["dagger"] = asdict(self.dagger)

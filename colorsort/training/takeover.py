@@ -20,12 +20,12 @@ from typing import Any
 import numpy as np
 
 from colorsort.benchmark.evaluate import observation_settings
-from colorsort.benchmark.gym_env import ColorSortGymEnv
 from colorsort.benchmark.policies import LeRobotPolicy
 from colorsort.cell.privileged import take_over_view
-from colorsort.cell.rollout import GymEpisode, Observer, Step, rollout
 from colorsort.data.config import CollectConfig, check_vcodec
-from colorsort.data.schema import features, frame
+from colorsort.envs.gym_env import ColorSortGymEnv
+from colorsort.envs.rollout import GymEpisode, Observer, Step, rollout
+from colorsort.envs.schema import features, frame
 from colorsort.errors import ConfigError
 from colorsort.expert.config import ExpertConfig, recording_expert
 from colorsort.expert.factory import make_expert

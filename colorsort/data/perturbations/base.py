@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from colorsort.cell.rollout import Step
+from colorsort.envs.rollout import Step
 
 if TYPE_CHECKING:
     from colorsort.config import Lighting

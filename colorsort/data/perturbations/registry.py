@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
+
+import draccus
 
 from colorsort.data.perturbations.base import Perturbation
 from colorsort.errors import ConfigError
@@ -15,6 +17,7 @@ def register[T: type[Perturbation]](cls: T) -> T:
     if cls.name in PERTURBATIONS:
         raise ConfigError(f"perturbation {cls.name!r} is registered twice")
     PERTURBATIONS[cls.name] = cls
+    draccus.encode.register(cls, as_text)  # draccus dispatches its encoders on the exact class
     return cls
 
 
@@ -35,3 +38,22 @@ def canonical(perturbations: Iterable[Perturbation]) -> tuple[Perturbation, ...]
             raise ConfigError(f"perturbation {p.name!r} given twice: {found[p.name]!r} and {p!r}")
         found[p.name] = p
     return tuple(sorted((p for p in found.values() if p.active), key=lambda p: p.name))
+
+
+def as_text(p: Perturbation, declared_type: object = None) -> str:
+    """A perturbation as a configuration file or a list flag writes it: ``NAME:VALUE`` (``late_pass:100``)."""
+    return f"{p.name}:{p.text}"
+
+
+def from_text(text: str) -> Perturbation:
+    """``as_text``'s inverse; ConfigError naming the valid perturbations or values otherwise."""
+    name, colon, value = str(text).partition(":")
+    if not colon:
+        raise ConfigError(f"perturbation {text!r}: give NAME:VALUE with NAME one of {sorted(PERTURBATIONS)}")
+    return parse(name, value)
+
+
+
+@draccus.decode.register(Perturbation)  # the commands' configurations hold perturbations as NAME:VALUE
+def _decode(raw: object, path: Sequence[str] = ()) -> Perturbation:
+    return from_text(str(raw))

@@ -1,5 +1,5 @@
 """LeRobot plugin hook: importing this registers ColorSort's ``EnvConfig`` (``--env.type=colorsort``)."""
 
-from colorsort.benchmark.lerobot_env import ColorSortEnv
+from colorsort.envs.lerobot_env import ColorSortEnv
 
 __all__ = ["ColorSortEnv"]

@@ -31,8 +31,9 @@ from typing import Any
 
 import numpy as np
 
-from colorsort.cell.env import ColorSort
-from colorsort.config import BIN_COLORS, COLORS
+from colorsort.cell.observation import BOX_STATE, StateLayout
+from colorsort.config import BIN_COLORS
+from colorsort.envs.robosuite_task import ColorSort
 
 STATE = "observation.state"
 ENV_STATE = "observation.environment_state"
@@ -51,31 +52,29 @@ def joint_names(env: ColorSort) -> list[str]:
     return [j.removeprefix(prefix) for j in env.robots[0].robot_joints]
 
 
-def _state_names(joints: list[str], tracking: bool) -> list[str]:
-    # The encoder only on a tracking belt: on a stopping one it adds nothing a policy needs, and the
-    # policies trained on stopping-belt data keep their input.
-    return ([f"{j}.pos" for j in joints] + [f"{j}.vel" for j in joints]
-            + ["cup.x", "cup.y", "cup.z", "cup.qx", "cup.qy", "cup.qz", "cup.qw",
-               "suction.on", "suction.sealed", "ray.blocked", "belt.running"] + (["belt.travel"] if tracking else []))
+def state_layout(env: ColorSort) -> StateLayout:
+    """Where each quantity lies in ``env``'s ``observation.state`` (``cell.observation``). The encoder only on a
+    tracking belt: on a stopping one it adds nothing a policy needs, and the policies trained on stopping-belt data
+    keep their input."""
+    return StateLayout(len(joint_names(env)), env.config.tracking)
 
 
 def state_names(env: ColorSort) -> list[str]:
     """The names of ``observation.state``'s elements."""
-    return _state_names(joint_names(env), env.config.tracking)
+    return state_layout(env).names(joint_names(env))
 
 
 def state_size(n_joints: int, tracking: bool = False) -> int:
     """Length of ``observation.state`` for an arm with ``n_joints`` joints, on a tracking belt or not."""
-    return len(_state_names([f"joint{k}" for k in range(n_joints)], tracking))
+    return StateLayout(n_joints, tracking).size
 
 
 def env_state_names() -> list[str]:
     """The names of ``observation.environment_state``'s elements."""
-    return ([f"box.is_{c}" for c in COLORS] + ["box.x", "box.y", "box.z", "box.qw", "box.qx", "box.qy", "box.qz",
-                                               "box.present"])
+    return BOX_STATE.names()
 
 
-ENV_STATE_SIZE = len(env_state_names())  # = len(Plant.next_box_state())
+ENV_STATE_SIZE = BOX_STATE.size  # = len(Plant.next_box_state())
 
 
 def action_names(env: ColorSort) -> list[str]:
@@ -104,11 +103,10 @@ def features(env: ColorSort, cameras: tuple[str, ...], image_size: tuple[int, in
 
 def robot_state(env: ColorSort, obs: dict[str, Any]) -> np.ndarray:
     """``observation.state`` from an observation of ``env`` (see the module docstring)."""
-    flags: list[float] = [env.plant.seal.commanded, env.suction_sealed, env.box_detected, env.belt_running]
-    if env.config.tracking:
-        flags.append(env.plant.belt.travel)
-    return np.concatenate([obs["robot0_joint_pos"], obs["robot0_joint_vel"], obs["robot0_eef_pos"],
-                           obs["robot0_eef_quat"], np.asarray(flags, float)]).astype(np.float32)
+    flags = (float(env.plant.seal.commanded), float(env.suction_sealed), float(env.box_detected),
+             float(env.belt_running))
+    return state_layout(env).pack(obs["robot0_joint_pos"], obs["robot0_joint_vel"], obs["robot0_eef_pos"],
+                                  obs["robot0_eef_quat"], flags, env.plant.belt.travel if env.config.tracking else None)
 
 
 def box_state(env: ColorSort) -> np.ndarray:

@@ -26,10 +26,10 @@ import numpy as np
 from gymnasium import spaces
 
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, check_cameras
-from colorsort.cell.env import ColorSort
 from colorsort.cell.referee import Outcome, judge, outcome_counts
 from colorsort.config import is_distractor
-from colorsort.data.schema import ENV_STATE_SIZE, box_state, robot_state, state_size
+from colorsort.envs.robosuite_task import ColorSort
+from colorsort.envs.schema import ENV_STATE_SIZE, box_state, robot_state, state_size
 from colorsort.errors import ConfigError
 from colorsort.robots import ROBOTS
 from colorsort.shifts import parse_shifts
@@ -187,6 +187,6 @@ def register_envs() -> None:
         if gym_id not in gym.registry:
             # gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", device=...) runs the batched cell
             # (MuJoCo Warp, the gpu extra; imported only then)
-            gym.register(id=gym_id, entry_point="colorsort.benchmark.gym_env:ColorSortGymEnv", kwargs={"variant": name},
+            gym.register(id=gym_id, entry_point="colorsort.envs.gym_env:ColorSortGymEnv", kwargs={"variant": name},
                          disable_env_checker=True,
                          vector_entry_point="colorsort.batched.vector_env:BatchedVectorEnv")

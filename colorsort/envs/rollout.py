@@ -17,7 +17,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from colorsort.cell.env import ColorSort
+from colorsort.envs.robosuite_task import ColorSort
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
-from colorsort.data.schema import ENV_STATE_SIZE, state_size
+from colorsort.envs.schema import ENV_STATE_SIZE, state_size
 from colorsort.errors import ConfigError
 from colorsort.robots import ROBOTS
 from colorsort.shifts import parse_shifts
