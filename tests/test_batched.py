@@ -120,6 +120,11 @@ def observe_twins(n_joints: int, tracking: bool, seed: int = 0) -> tuple[np.ndar
     color = rng.integers(0, BOX_STATE.n_colors, (worlds, pool))
     serial = rng.permutation(worlds * pool).reshape(worlds, pool)
     with wp.ScopedDevice("cpu"):
+        pool_struct, boxes = K.Pool(), K.Boxes()
+        pool_struct.size, pool_struct.qpos = pool, wp.array(box_qpos.astype(np.int32), dtype=int)
+        boxes.status, boxes.color = wp.array(status.astype(np.int32), dtype=int), wp.array(color.astype(np.int32),
+                                                                                              dtype=int)
+        boxes.serial = wp.array(serial.astype(np.int32), dtype=int)
         state = wp.zeros((worlds, layout.size), dtype=float)
         env_state = wp.zeros((worlds, BOX_STATE.size), dtype=float)
         wp.launch(observe, dim=worlds, inputs=[
@@ -127,10 +132,8 @@ def observe_twins(n_joints: int, tracking: bool, seed: int = 0) -> tuple[np.ndar
             wp.array(cup[:, None, :].astype(np.float32), dtype=wp.vec3),
             wp.array(quat[:, None, :].astype(np.float32), dtype=wp.quat), wp.array(arm_qpos, dtype=int),
             wp.array(arm_dof, dtype=int), 0, 0, wp.array(suction, dtype=int), wp.array(held, dtype=int),
-            wp.array(detected, dtype=int), wp.array(running, dtype=int), wp.array(travel, dtype=wp.float64), pool,
-            wp.array(status.astype(np.int32), dtype=int), wp.array(color.astype(np.int32), dtype=int),
-            wp.array(serial.astype(np.int32), dtype=int), wp.array(box_qpos.astype(np.int32), dtype=int),
-            observation_layout(layout, BOX_STATE), state, env_state])
+            wp.array(detected, dtype=int), wp.array(running, dtype=int), wp.array(travel, dtype=wp.float64),
+            pool_struct, boxes, observation_layout(layout, BOX_STATE), state, env_state])
         got_state, got_box = state.numpy(), env_state.numpy()
     want_state, want_box = [], []
     for w in range(worlds):

@@ -336,7 +336,7 @@ def test_docs_tables_are_the_ones_scores_json_gives():
 
 
 def test_training_times_over_seeds_read_as_one_figure_when_they_round_alike():
-    from colorsort.training.publishing.report import span
+    from colorsort.training.publishing.run_summary import span
 
     assert span([53.6, 53.9, 54.2]) == "54"
     assert span([49.2, 57.4]) == "49-57"

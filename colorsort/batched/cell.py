@@ -162,11 +162,26 @@ class BatchedCell:
             self.observation_layout = observation_layout(state_layout, BOX_STATE)
             self.state = wp.zeros((n, state_layout.size), dtype=float)
             self.env_state = wp.zeros((n, BOX_STATE.size), dtype=float)
+            self.pool, self.boxes, self.bodies, self.event_log, self.draws = self._structs()
             self.cameras = BatchedCameras(m, n, tuple(cameras), image_size) if cameras else None
         self.images: dict = {}
         self._graph = None
         self.use_graph = use_graph
         self.seeds = np.full(n, -1, np.int64)
+
+    def _structs(self) -> tuple[K.Pool, K.Boxes, K.Bodies, K.Events, K.Draws]:
+        """The per-box and per-world arrays grouped as the kernels take them (each holds the arrays above, which are
+        written in place, never replaced: a captured graph keeps their addresses)."""
+        pool, boxes, bodies, events, draws = K.Pool(), K.Boxes(), K.Bodies(), K.Events(), K.Draws()
+        pool.size, pool.qpos, pool.dof, pool.body = self.spec.pool_size, self.box_qpos, self.box_dof, self.box_body
+        pool.geom, pool.weld, pool.park = self.box_geom, self.box_weld, self.park_pos
+        boxes.status, boxes.color, boxes.bin, boxes.serial = self.status, self.color, self.bin_of, self.serial
+        bodies.xpos, bodies.qpos, bodies.qvel = self.d.xpos, self.d.qpos, self.d.qvel
+        bodies.gravcomp, bodies.eq_active = self.m.body_gravcomp, self.d.eq_active
+        events.count, events.time, events.serial = self.n_events, self.ev_time, self.ev_serial
+        events.color, events.outcome, events.bin = self.ev_color, self.ev_outcome, self.ev_bin
+        draws.color, draws.offset, draws.yaw = self.draw_color, self.draw_offset, self.draw_yaw
+        return pool, boxes, bodies, events, draws
 
     # ------------------------------------------------------------------ episodes
     def reset(self, seeds: list[int] | np.ndarray, worlds: np.ndarray | None = None) -> StepResult:
@@ -290,34 +305,27 @@ class BatchedCell:
             wp.launch(K.seal_find, dim=d.naconmax, inputs=[
                 d.nacon, d.contact.geom, d.contact.frame, d.contact.worldid, s.pad_geom, self.box_of_geom, s.cup_body,
                 d.xmat, self.suction_cmd, self.held, cos_seal, self.candidate])
-            wp.launch(K.seal_make, dim=n, inputs=[
-                self.candidate, s.pool_size, s.cup_body, self.box_body, self.box_weld, self.serial, d.xpos, d.xquat,
-                d.xmat, m.eq_data, d.eq_active, self.held, self.grips])
+            wp.launch(K.seal_make, dim=n, inputs=[self.candidate, self.pool, self.boxes, s.cup_body, self.bodies,
+                                                  d.xquat, d.xmat, m.eq_data, self.held, self.grips])
             mjw.step2(m, d)
         wp.launch(K.advance_clock, dim=n, inputs=[self.now, wp.float64(self.control_dt), self.steps])
-        wp.launch(K.referee, dim=n, inputs=[
-            self.now, s.pool_size, self.layout, int(s.config.bin_capacity), self.box_qpos, self.box_dof, self.box_body,
-            self.box_weld, self.park_pos, d.xpos, d.qpos, d.qvel, m.body_gravcomp, self.status, self.color,
-            self.bin_of, self.serial, self.held, d.eq_active, self.n_events, self.ev_time, self.ev_serial,
-            self.ev_color, self.ev_outcome, self.ev_bin, self.reward, self.bins_emptied])
+        wp.launch(K.referee, dim=n, inputs=[self.now, self.layout, int(s.config.bin_capacity), self.pool, self.bodies,
+                                            self.boxes, self.held, self.event_log, self.reward, self.bins_emptied])
         self._launch_spawn()
         mjw.forward(m, d)
         self._launch_observe()
 
     def _launch_spawn(self) -> None:
-        s, d = self.spec, self.d
         wp.launch(K.spawn, dim=self.worlds, inputs=[
-            self.now, self.next_time, float(s.config.spawn_period), s.pool_size, self.layout, self.draw_color,
-            self.draw_offset, self.draw_yaw, self.palette, self.box_qpos, self.box_dof, self.box_body, self.box_geom,
-            d.xpos, d.qpos, d.qvel, self.m.body_gravcomp, self.m.geom_rgba, self.status, self.color, self.serial,
-            self.next_serial, self.spawned])
+            self.now, self.next_time, float(self.spec.config.spawn_period), self.layout, self.draws, self.palette,
+            self.pool, self.bodies, self.m.geom_rgba, self.boxes, self.next_serial, self.spawned])
 
     def _launch_observe(self) -> None:
         s, d = self.spec, self.d
         wp.launch(observe, dim=self.worlds, inputs=[
             d.qpos, d.qvel, d.site_xpos, d.xquat, self.arm_qpos, self.arm_dof, s.eef_site, s.eef_body,
-            self.suction_cmd, self.held, self.detected, self.running, self.travel, s.pool_size,
-            self.status, self.color, self.serial, self.box_qpos, self.observation_layout, self.state, self.env_state])
+            self.suction_cmd, self.held, self.detected, self.running, self.travel, self.pool, self.boxes,
+            self.observation_layout, self.state, self.env_state])
 
     def _result(self) -> StepResult:
         return StepResult(wp.to_torch(self.state), wp.to_torch(self.env_state), wp.to_torch(self.reward), self.images)

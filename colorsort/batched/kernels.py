@@ -49,6 +49,66 @@ class Layout:
     settled_speed: float
 
 
+@wp.struct
+class Pool:
+    """The box pool's addresses in the model, the same in every world: each box's qpos, dof, body, geom and weld
+    indices, and where it waits parked [m]."""
+
+    size: int
+    qpos: wp.array(dtype=int)
+    dof: wp.array(dtype=int)
+    body: wp.array(dtype=int)
+    geom: wp.array(dtype=int)
+    weld: wp.array(dtype=int)
+    park: wp.array(dtype=wp.vec3)
+
+
+@wp.struct
+class Boxes:
+    """Every world's boxes: status (``STATUSES`` codes), colour (``COLOR_NAMES`` index), bin (``BIN_COLORS`` index;
+    -1: none) and serial (-1: not in an episode)."""
+
+    status: wp.array2d(dtype=int)
+    color: wp.array2d(dtype=int)
+    bin: wp.array2d(dtype=int)
+    serial: wp.array2d(dtype=int)
+
+
+@wp.struct
+class Bodies:
+    """What the rules read and write of MuJoCo's state, every world: body positions [m], qpos, qvel, each body's
+    gravity compensation (1: a parked box floats) and which welds are on."""
+
+    xpos: wp.array2d(dtype=wp.vec3)
+    qpos: wp.array2d(dtype=float)
+    qvel: wp.array2d(dtype=float)
+    gravcomp: wp.array2d(dtype=float)
+    eq_active: wp.array2d(dtype=bool)
+
+
+@wp.struct
+class Events:
+    """Every world's record of the boxes that left play: how many, and per event its time [s], serial, colour,
+    outcome (``OUTCOMES`` codes) and bin (-1: none)."""
+
+    count: wp.array(dtype=int)
+    time: wp.array2d(dtype=wp.float64)
+    serial: wp.array2d(dtype=int)
+    color: wp.array2d(dtype=int)
+    outcome: wp.array2d(dtype=int)
+    bin: wp.array2d(dtype=int)
+
+
+@wp.struct
+class Draws:
+    """Every world's episode draws by serial (``schedule.episode_draws``): colour, offset off the centre line [m],
+    yaw [rad]."""
+
+    color: wp.array2d(dtype=int)
+    offset: wp.array2d(dtype=float)
+    yaw: wp.array2d(dtype=float)
+
+
 @wp.func
 def belt_runs(distance: float, sensor_range: float, tracking: int, belt_pass: int) -> int:
     """``conveyor.Belt.drive``: the belt runs unless the ray sees a box (a tracking belt always runs)."""
@@ -175,22 +235,21 @@ def seal_find(nacon: wp.array(dtype=int), geom: wp.array(dtype=wp.vec2i), frame:
 
 
 @wp.kernel
-def seal_make(candidate: wp.array(dtype=int), pool_size: int, cup_body: int, box_body: wp.array(dtype=int),
-              box_weld: wp.array(dtype=int), box_serial: wp.array2d(dtype=int), xpos: wp.array2d(dtype=wp.vec3),
+def seal_make(candidate: wp.array(dtype=int), pool: Pool, boxes: Boxes, cup_body: int, sim: Bodies,
               xquat: wp.array2d(dtype=wp.quat), xmat: wp.array2d(dtype=wp.mat33), eq_data: wp.array2d(dtype=vec11),
-              eq_active: wp.array2d(dtype=bool), held: wp.array(dtype=int), grips: wp.array3d(dtype=float)):
+              held: wp.array(dtype=int), grips: wp.array3d(dtype=float)):
     """``suction.VacuumSeal._seal``: weld the candidate box to the cup at the pose they have now; record the
     grip (``VacuumSeal.grip``: offset from the cup's axis [m], turn [deg] in [-45, 45)) under its serial."""
     w = wp.tid()
     box = candidate[w]
-    candidate[w] = pool_size
-    if box >= pool_size:
+    candidate[w] = pool.size
+    if box >= pool.size:
         return
-    body = box_body[box]
+    body = pool.body[box]
     R = xmat[w, cup_body]
-    rel = wp.transpose(R) @ (xpos[w, body] - xpos[w, cup_body])
+    rel = wp.transpose(R) @ (sim.xpos[w, body] - sim.xpos[w, cup_body])
     q = mjmath.mul_quat(mjmath.quat_inv(xquat[w, cup_body]), xquat[w, body])
-    eq = box_weld[box]
+    eq = pool.weld[box]
     data = eq_data[w, eq]
     data[0] = 0.0
     data[1] = 0.0
@@ -203,9 +262,9 @@ def seal_make(candidate: wp.array(dtype=int), pool_size: int, cup_body: int, box
     data[8] = q[2]
     data[9] = q[3]
     eq_data[w, eq] = data
-    eq_active[w, eq] = True
+    sim.eq_active[w, eq] = True
     held[w] = box
-    serial = box_serial[w, box]
+    serial = boxes.serial[w, box]
     if serial >= 0 and serial < grips.shape[1]:
         M = mjmath.quat_to_mat(q)
         yaw = wp.degrees(wp.atan2(M[1, 0], M[0, 0]))
@@ -214,96 +273,79 @@ def seal_make(candidate: wp.array(dtype=int), pool_size: int, cup_body: int, box
 
 
 @wp.func
-def park(w: int, box: int, box_qpos: wp.array(dtype=int), box_dof: wp.array(dtype=int),
-         box_body: wp.array(dtype=int), box_weld: wp.array(dtype=int), park_pos: wp.array(dtype=wp.vec3),
-         qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), gravcomp: wp.array2d(dtype=float),
-         status: wp.array2d(dtype=int), bin_of: wp.array2d(dtype=int), serial: wp.array2d(dtype=int),
-         held: wp.array(dtype=int), eq_active: wp.array2d(dtype=bool)):
+def park(w: int, box: int, pool: Pool, sim: Bodies, boxes: Boxes, held: wp.array(dtype=int)):
     """``plant.Plant.remove_box``: the cup lets go of it, and it goes back to the pool."""
     if held[w] == box:
-        eq_active[w, box_weld[box]] = False
+        sim.eq_active[w, pool.weld[box]] = False
         held[w] = -1
-    qa = box_qpos[box]
-    va = box_dof[box]
-    p = park_pos[box]
-    qpos[w, qa + 0] = p[0]
-    qpos[w, qa + 1] = p[1]
-    qpos[w, qa + 2] = p[2]
-    qpos[w, qa + 3] = 1.0
-    qpos[w, qa + 4] = 0.0
-    qpos[w, qa + 5] = 0.0
-    qpos[w, qa + 6] = 0.0
+    qa = pool.qpos[box]
+    va = pool.dof[box]
+    p = pool.park[box]
+    sim.qpos[w, qa + 0] = p[0]
+    sim.qpos[w, qa + 1] = p[1]
+    sim.qpos[w, qa + 2] = p[2]
+    sim.qpos[w, qa + 3] = 1.0
+    sim.qpos[w, qa + 4] = 0.0
+    sim.qpos[w, qa + 5] = 0.0
+    sim.qpos[w, qa + 6] = 0.0
     for i in range(6):
-        qvel[w, va + i] = 0.0
-    gravcomp[w, box_body[box]] = 1.0
-    status[w, box] = PARKED
-    bin_of[w, box] = -1
-    serial[w, box] = -1
+        sim.qvel[w, va + i] = 0.0
+    sim.gravcomp[w, pool.body[box]] = 1.0
+    boxes.status[w, box] = PARKED
+    boxes.bin[w, box] = -1
+    boxes.serial[w, box] = -1
 
 
 @wp.kernel
-def referee(now: wp.array(dtype=wp.float64), pool_size: int, L: Layout, bin_capacity: int,
-            box_qpos: wp.array(dtype=int), box_dof: wp.array(dtype=int), box_body: wp.array(dtype=int),
-            box_weld: wp.array(dtype=int), park_pos: wp.array(dtype=wp.vec3), xpos: wp.array2d(dtype=wp.vec3),
-            qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), gravcomp: wp.array2d(dtype=float),
-            status: wp.array2d(dtype=int), color: wp.array2d(dtype=int), bin_of: wp.array2d(dtype=int),
-            serial: wp.array2d(dtype=int), held: wp.array(dtype=int), eq_active: wp.array2d(dtype=bool),
-            n_events: wp.array(dtype=int), ev_time: wp.array2d(dtype=wp.float64), ev_serial: wp.array2d(dtype=int),
-            ev_color: wp.array2d(dtype=int), ev_outcome: wp.array2d(dtype=int), ev_bin: wp.array2d(dtype=int),
-            reward: wp.array(dtype=float), bins_emptied: wp.array(dtype=int)):
+def referee(now: wp.array(dtype=wp.float64), L: Layout, bin_capacity: int, pool: Pool, sim: Bodies, boxes: Boxes,
+            held: wp.array(dtype=int), events: Events, reward: wp.array(dtype=float),
+            bins_emptied: wp.array(dtype=int)):
     """``referee.Referee.update``: judge every box in play, in pool order; record each that left play;
     empty a full bin; boxes that left the belt or fell go back to the pool."""
     w = wp.tid()
     r = float(0.0)  # noqa: UP018
-    for box in range(pool_size):
-        if status[w, box] != IN_PLAY:
+    for box in range(pool.size):
+        if boxes.status[w, box] != IN_PLAY:
             continue
-        va = box_dof[box]
-        speed = wp.length(wp.vec3(qvel[w, va], qvel[w, va + 1], qvel[w, va + 2]))
-        res = outcome_of(color[w, box], xpos[w, box_body[box]], speed, L)
+        va = pool.dof[box]
+        speed = wp.length(wp.vec3(sim.qvel[w, va], sim.qvel[w, va + 1], sim.qvel[w, va + 2]))
+        res = outcome_of(boxes.color[w, box], sim.xpos[w, pool.body[box]], speed, L)
         outcome = res[0]
         if outcome < 0:
             continue
-        k = n_events[w]
-        if k < ev_time.shape[1]:
-            ev_time[w, k] = now[w]
-            ev_serial[w, k] = serial[w, box]
-            ev_color[w, k] = color[w, box]
-            ev_outcome[w, k] = outcome
-            ev_bin[w, k] = res[1]
-        n_events[w] = k + 1
+        k = events.count[w]
+        if k < events.time.shape[1]:
+            events.time[w, k] = now[w]
+            events.serial[w, k] = boxes.serial[w, box]
+            events.color[w, k] = boxes.color[w, box]
+            events.outcome[w, k] = outcome
+            events.bin[w, k] = res[1]
+        events.count[w] = k + 1
         if outcome == PLACED:
             r += 1.0
         elif outcome != REJECTED:
             r -= 1.0
         if res[1] >= 0:
-            status[w, box] = IN_BIN
-            bin_of[w, box] = res[1]
+            boxes.status[w, box] = IN_BIN
+            boxes.bin[w, box] = res[1]
             inside = int(0)  # noqa: UP018
-            for other in range(pool_size):
-                if status[w, other] == IN_BIN and bin_of[w, other] == res[1]:
+            for other in range(pool.size):
+                if boxes.status[w, other] == IN_BIN and boxes.bin[w, other] == res[1]:
                     inside += 1
             if inside >= bin_capacity:
-                for other in range(pool_size):
-                    if status[w, other] == IN_BIN and bin_of[w, other] == res[1]:
-                        park(w, other, box_qpos, box_dof, box_body, box_weld, park_pos, qpos, qvel, gravcomp, status,
-                             bin_of, serial, held, eq_active)
+                for other in range(pool.size):
+                    if boxes.status[w, other] == IN_BIN and boxes.bin[w, other] == res[1]:
+                        park(w, other, pool, sim, boxes, held)
                 bins_emptied[w] = bins_emptied[w] + 1
         else:
-            park(w, box, box_qpos, box_dof, box_body, box_weld, park_pos, qpos, qvel, gravcomp, status, bin_of,
-                 serial, held, eq_active)
+            park(w, box, pool, sim, boxes, held)
     reward[w] = r
 
 
 @wp.kernel
-def spawn(now: wp.array(dtype=wp.float64), next_time: wp.array(dtype=wp.float64), period: float, pool_size: int,
-          L: Layout, draw_color: wp.array2d(dtype=int), draw_offset: wp.array2d(dtype=float),
-          draw_yaw: wp.array2d(dtype=float), palette: wp.array(dtype=wp.vec4), box_qpos: wp.array(dtype=int),
-          box_dof: wp.array(dtype=int), box_body: wp.array(dtype=int), box_geom: wp.array(dtype=int),
-          xpos: wp.array2d(dtype=wp.vec3), qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float),
-          gravcomp: wp.array2d(dtype=float), geom_rgba: wp.array2d(dtype=wp.vec4), status: wp.array2d(dtype=int),
-          color: wp.array2d(dtype=int), serial: wp.array2d(dtype=int), next_serial: wp.array(dtype=int),
-          spawned: wp.array(dtype=int)):
+def spawn(now: wp.array(dtype=wp.float64), next_time: wp.array(dtype=wp.float64), period: float, L: Layout,
+          draws: Draws, palette: wp.array(dtype=wp.vec4), pool: Pool, sim: Bodies, geom_rgba: wp.array2d(dtype=wp.vec4),
+          boxes: Boxes, next_serial: wp.array(dtype=int), spawned: wp.array(dtype=int)):
     """``conveyor.Spawner.spawn_if_due``: when a box is due, the pool has one and the spawn point is clear,
     set the lowest parked box down with the episode's next draw (``schedule.episode_draws``)."""
     w = wp.tid()
@@ -311,34 +353,34 @@ def spawn(now: wp.array(dtype=wp.float64), next_time: wp.array(dtype=wp.float64)
         return
     first = int(-1)  # noqa: UP018
     clear = int(1)  # noqa: UP018
-    for box in range(pool_size):
-        if status[w, box] == PARKED and first < 0:
+    for box in range(pool.size):
+        if boxes.status[w, box] == PARKED and first < 0:
             first = box
-        if status[w, box] == IN_PLAY:
-            p = xpos[w, box_body[box]]
+        if boxes.status[w, box] == IN_PLAY:
+            p = sim.xpos[w, pool.body[box]]
             if wp.abs(p[0] - L.spawn_x) < CLEAR * L.box_size and wp.abs(p[1] - L.belt_y) < L.belt_width:
                 clear = 0
     n = next_serial[w]
-    if clear == 0 or first < 0 or n >= draw_color.shape[1]:
+    if clear == 0 or first < 0 or n >= draws.color.shape[1]:
         return
-    c = draw_color[w, n]
-    yaw = draw_yaw[w, n]
-    qa = box_qpos[first]
-    va = box_dof[first]
-    qpos[w, qa + 0] = L.spawn_x
-    qpos[w, qa + 1] = L.belt_y + draw_offset[w, n]
-    qpos[w, qa + 2] = L.belt_top_z + L.box_size / 2.0 + GAP
-    qpos[w, qa + 3] = wp.cos(yaw / 2.0)
-    qpos[w, qa + 4] = 0.0
-    qpos[w, qa + 5] = 0.0
-    qpos[w, qa + 6] = wp.sin(yaw / 2.0)
+    c = draws.color[w, n]
+    yaw = draws.yaw[w, n]
+    qa = pool.qpos[first]
+    va = pool.dof[first]
+    sim.qpos[w, qa + 0] = L.spawn_x
+    sim.qpos[w, qa + 1] = L.belt_y + draws.offset[w, n]
+    sim.qpos[w, qa + 2] = L.belt_top_z + L.box_size / 2.0 + GAP
+    sim.qpos[w, qa + 3] = wp.cos(yaw / 2.0)
+    sim.qpos[w, qa + 4] = 0.0
+    sim.qpos[w, qa + 5] = 0.0
+    sim.qpos[w, qa + 6] = wp.sin(yaw / 2.0)
     for i in range(6):
-        qvel[w, va + i] = 0.0
-    geom_rgba[w, box_geom[first]] = palette[c]
-    gravcomp[w, box_body[first]] = 0.0
-    status[w, first] = IN_PLAY
-    color[w, first] = c
-    serial[w, first] = n
+        sim.qvel[w, va + i] = 0.0
+    geom_rgba[w, pool.geom[first]] = palette[c]
+    sim.gravcomp[w, pool.body[first]] = 0.0
+    boxes.status[w, first] = IN_PLAY
+    boxes.color[w, first] = c
+    boxes.serial[w, first] = n
     next_serial[w] = n + 1
     next_time[w] = now[w] + wp.float64(period)
     spawned[w] = spawned[w] + 1

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from colorsort.batched.kernels import IN_PLAY
+from colorsort.batched.kernels import IN_PLAY, Boxes, Pool
 from colorsort.cell.observation import BoxStateLayout, StateLayout
 
 
@@ -40,9 +40,8 @@ def observe(qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), site_x
             xquat: wp.array2d(dtype=wp.quat), arm_qpos: wp.array(dtype=int), arm_dof: wp.array(dtype=int),
             eef_site: int, eef_body: int, suction_cmd: wp.array(dtype=int), held: wp.array(dtype=int),
             detected: wp.array(dtype=int), running: wp.array(dtype=int), travel: wp.array(dtype=wp.float64),
-            pool_size: int, status: wp.array2d(dtype=int), color: wp.array2d(dtype=int),
-            serial: wp.array2d(dtype=int), box_qpos: wp.array(dtype=int), layout: ObservationLayout,
-            state: wp.array2d(dtype=float), env_state: wp.array2d(dtype=float)):
+            pool: Pool, boxes: Boxes, layout: ObservationLayout, state: wp.array2d(dtype=float),
+            env_state: wp.array2d(dtype=float)):
     """``schema.robot_state`` and ``schema.box_state`` (``Plant.next_box_state``): ``observation.state`` and
     ``observation.environment_state`` of every world, at ``cell.observation``'s offsets."""
     w = wp.tid()
@@ -64,15 +63,15 @@ def observe(qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), site_x
     if layout.travel >= 0:
         state[w, layout.travel] = float(travel[w])
     best = int(-1)  # noqa: UP018
-    for box in range(pool_size):
-        if status[w, box] == IN_PLAY and (best < 0 or serial[w, box] < serial[w, best]):
+    for box in range(pool.size):
+        if boxes.status[w, box] == IN_PLAY and (best < 0 or boxes.serial[w, box] < boxes.serial[w, best]):
             best = box
     for k in range(layout.box_size):
         env_state[w, k] = 0.0
     if best >= 0:
-        if color[w, best] < layout.n_colors:  # a colour with no class has no one-hot (as Plant.next_box_state)
-            env_state[w, color[w, best]] = 1.0
-        qa = box_qpos[best]
+        if boxes.color[w, best] < layout.n_colors:  # a colour with no class has no one-hot (as Plant.next_box_state)
+            env_state[w, boxes.color[w, best]] = 1.0
+        qa = pool.qpos[best]
         for k in range(7):
             env_state[w, layout.box_pose + k] = qpos[w, qa + k]
         env_state[w, layout.box_present] = 1.0

@@ -53,7 +53,7 @@ def read(path: Path) -> dict:
 
 def plot_runs(files: list[Path], labels: list[str], out: Path) -> None:
     """Each run's learning curve (its first seed's checkpoints on its main variant) on one axis, written to ``out``."""
-    from colorsort.training.publishing.report import plot_curves
+    from colorsort.training.publishing.run_summary import plot_curves
     from colorsort.training.publishing.tables import machine, main_variant
     from colorsort.training.results_file import PipelineResults
 

@@ -20,7 +20,7 @@ from pathlib import Path
 from colorsort.errors import ConfigError
 from colorsort.training import pipeline_stages as stages
 from colorsort.training import selection
-from colorsort.training.publishing.report import first_episodes, plot_curve, plot_demos, summary_table, table
+from colorsort.training.publishing.run_summary import first_episodes, plot_curve, plot_demos, summary_table, table
 from colorsort.training.publishing.ship import add_seeds, machine, ship
 from colorsort.training.recipes import Recipe
 from colorsort.training.results_file import CurvePoint, PipelineResults, ScoreRow, ValidationPoint, report_from_json

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from colorsort.errors import ConfigError
 from colorsort.training.dagger_config import DaggerConfig
-from colorsort.training.publishing.report import curve_table, plot_demos, summary_table, table, validation_table
+from colorsort.training.publishing.run_summary import curve_table, plot_demos, summary_table, table, validation_table
 from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
 from colorsort.training.results_file import PipelineResults, Sitting
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant

@@ -32,7 +32,7 @@ from pathlib import Path
 from colorsort.errors import ConfigError
 from colorsort.expert.config import changes_text
 from colorsort.training.method_names import method_name
-from colorsort.training.publishing.report import curve_table, scored_checkpoints, span, summary_table
+from colorsort.training.publishing.run_summary import curve_table, scored_checkpoints, span, summary_table
 from colorsort.training.results_file import PipelineResults, ScoreRow
 
 KINDS = ("table", "curve", "mistakes", "headline")
