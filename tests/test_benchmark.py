@@ -105,7 +105,7 @@ def test_the_same_seeds_give_the_same_numbers_whatever_the_number_of_envs(random
                       "--cameras", "none"]) == 0
     assert "success rate" in capsys.readouterr().out
     assert exit_status(eval_main, ["--episodes", "1", "--envs", "0"]) == 2
-    assert "--envs 0: give at least 1" in capsys.readouterr().err
+    assert "--envs (--executor.workers): workers=0 is out of range; valid values lie in [1" in capsys.readouterr().err
 
 
 @pytest.mark.slow

@@ -210,7 +210,7 @@ def test_ctrl_c_on_ray_keeps_every_finished_episode_and_resume_completes(cluster
     assert 1 <= len(marker["episodes"]) < 8 and set(marker["episodes"]) == set(marker["tried"])
 
     summary = collect(CollectConfig(out=str(out), episodes=8, boxes_per_episode=2, cameras=(), shard_size=8,
-                                    workers=1, executor="ray", resume=True), **QUIET)
+                                    executor=ExecutorConfig("ray", 1), resume=True), **QUIET)
     assert not summary.errors and summary.dataset_episodes == 8
     assert sorted(json.loads((out / MARKER).read_text())["episodes"]) == list(range(8))
     same_episodes(out, reference, only=range(4))  # the reference holds the first 4

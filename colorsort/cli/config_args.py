@@ -111,12 +111,17 @@ def parse_config[T](cls: type[T], argv: Sequence[str], *, prog: str, description
                     defaults: T | None = None, spelling: Spelling = Spelling(), epilog: str | None = None) -> T:
     """``argv`` as an instance of ``cls`` (``defaults``' values where a flag is not given); ``--help`` prints and
     exits 0; a bad flag exits 2; a bad value raises the ``ConfigError`` of the field that refused it."""
-    args = respell(cls, defaults, list(argv), spelling)
+    typed: dict[str, str] = {}
+    args = respell(cls, defaults, list(argv), spelling, typed)
     parser = _Parser(cls, defaults, prog=prog, description=description, epilog=epilog, formatter_class=_Formatter)
     try:
         return typing.cast(T, parser.parse_args(args))
     except ParsingError as err:
-        raise _reason(err) from err
+        reason = _reason(err)
+        for path, old in typed.items():  # name the flag as the user wrote it when its field refused the value
+            if f"{path.rpartition('.')[2]}=" in str(reason):
+                raise ConfigError(f"{old} (--{path}): {reason}") from err
+        raise reason from err
 
 
 def _reason(err: BaseException) -> ConfigError:
@@ -129,8 +134,10 @@ def _reason(err: BaseException) -> ConfigError:
     return ConfigError(" ".join(str(err).split()))
 
 
-def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling) -> list[str]:
-    """``argv`` in draccus's spelling: every flag ``--path=yaml``, the older spellings translated (module doc)."""
+def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling,
+            typed: dict[str, str] | None = None) -> list[str]:
+    """``argv`` in draccus's spelling: every flag ``--path=yaml``, the older spellings translated (module doc);
+    ``typed`` gets each renamed flag's new path and its old name as given."""
     out: list[str] = []
     lists: dict[str, list] = {}  # list fields given, or added to by member flags: their entries so far
     i = 0
@@ -145,6 +152,8 @@ def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling) -> li
         if renamed:
             old = name
             name, has_fixed, fixed = renamed[2:].partition("=")
+            if typed is not None:
+                typed[name] = f"--{old}"
             if has_fixed and has_value and fixed != "true":
                 raise ConfigError(f"--{old} takes no value: it stands for {renamed}")
             if has_fixed and not has_value:  # a switch: --overwrite is --report.overwrite=true, and =false says no
