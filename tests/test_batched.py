@@ -125,15 +125,18 @@ def observe_twins(n_joints: int, tracking: bool, seed: int = 0) -> tuple[np.ndar
         boxes.status, boxes.color = wp.array(status.astype(np.int32), dtype=int), wp.array(color.astype(np.int32),
                                                                                               dtype=int)
         boxes.serial = wp.array(serial.astype(np.int32), dtype=int)
+        io = K.Controls()
+        io.suction_cmd, io.held = wp.array(suction, dtype=int), wp.array(held, dtype=int)
+        io.detected, io.running = wp.array(detected, dtype=int), wp.array(running, dtype=int)
+        io.belt_pass, io.travel = wp.zeros(worlds, dtype=int), wp.array(travel, dtype=wp.float64)
         state = wp.zeros((worlds, layout.size), dtype=float)
         env_state = wp.zeros((worlds, BOX_STATE.size), dtype=float)
         wp.launch(observe, dim=worlds, inputs=[
             wp.array(qpos.astype(np.float32), dtype=float), wp.array(qvel.astype(np.float32), dtype=float),
             wp.array(cup[:, None, :].astype(np.float32), dtype=wp.vec3),
             wp.array(quat[:, None, :].astype(np.float32), dtype=wp.quat), wp.array(arm_qpos, dtype=int),
-            wp.array(arm_dof, dtype=int), 0, 0, wp.array(suction, dtype=int), wp.array(held, dtype=int),
-            wp.array(detected, dtype=int), wp.array(running, dtype=int), wp.array(travel, dtype=wp.float64),
-            pool_struct, boxes, observation_layout(layout, BOX_STATE), state, env_state])
+            wp.array(arm_dof, dtype=int), 0, 0, io, pool_struct, boxes, observation_layout(layout, BOX_STATE), state,
+            env_state])
         got_state, got_box = state.numpy(), env_state.numpy()
     want_state, want_box = [], []
     for w in range(worlds):

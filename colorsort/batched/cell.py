@@ -163,6 +163,7 @@ class BatchedCell:
             self.state = wp.zeros((n, state_layout.size), dtype=float)
             self.env_state = wp.zeros((n, BOX_STATE.size), dtype=float)
             self.pool, self.boxes, self.bodies, self.event_log, self.draws = self._structs()
+            self.controls, self.rig = self._drives()
             self.cameras = BatchedCameras(m, n, tuple(cameras), image_size) if cameras else None
         self.images: dict = {}
         self._graph = None
@@ -182,6 +183,17 @@ class BatchedCell:
         events.color, events.outcome, events.bin = self.ev_color, self.ev_outcome, self.ev_bin
         draws.color, draws.offset, draws.yaw = self.draw_color, self.draw_offset, self.draw_yaw
         return pool, boxes, bodies, events, draws
+
+    def _drives(self) -> tuple[K.Controls, K.Rig]:
+        """Every world's commands and reports (the arrays above, in place), and the cell's drives as constants."""
+        s, io, rig = self.spec, K.Controls(), K.Rig()
+        io.suction_cmd, io.belt_pass, io.held = self.suction_cmd, self.belt_pass, self.held
+        io.detected, io.running, io.travel = self.detected, self.running, self.travel
+        rig.ray, rig.tracking, rig.speed = int(s.ray), int(s.config.tracking), float(s.config.belt_speed)
+        rig.dt, rig.suction = float(s.model.opt.timestep), int(s.suction)
+        rig.suction_off, rig.suction_on = float(s.suction_off), float(s.suction_on)
+        rig.belt_qpos, rig.belt_dof = int(s.belt_qpos), int(s.belt_dof)
+        return io, rig
 
     # ------------------------------------------------------------------ episodes
     def reset(self, seeds: list[int] | np.ndarray, worlds: np.ndarray | None = None) -> StepResult:
@@ -297,11 +309,8 @@ class BatchedCell:
                 mjw.mul_m(m, d, self.res, self.vec)
                 wp.launch(K.servo_torque, dim=(n, s.n_joints),
                           inputs=[self.res, d.qfrc_bias, self.arm_dof, self.arm_act, self.t_low, self.t_high, d.ctrl])
-            wp.launch(K.drive, dim=n, inputs=[
-                self.suction_cmd, self.belt_pass, d.sensordata, s.ray, self.layout, int(s.config.tracking),
-                float(s.config.belt_speed), float(s.model.opt.timestep), s.suction, s.suction_off, s.suction_on,
-                self.box_weld, d.qpos, d.qvel, s.belt_qpos, s.belt_dof, d.ctrl, self.held, d.eq_active, self.detected,
-                self.running, self.travel])
+            wp.launch(K.drive, dim=n, inputs=[self.controls, self.rig, self.layout, self.pool, self.bodies,
+                                              d.sensordata, d.ctrl])
             wp.launch(K.seal_find, dim=d.naconmax, inputs=[
                 d.nacon, d.contact.geom, d.contact.frame, d.contact.worldid, s.pad_geom, self.box_of_geom, s.cup_body,
                 d.xmat, self.suction_cmd, self.held, cos_seal, self.candidate])
@@ -324,8 +333,7 @@ class BatchedCell:
         s, d = self.spec, self.d
         wp.launch(observe, dim=self.worlds, inputs=[
             d.qpos, d.qvel, d.site_xpos, d.xquat, self.arm_qpos, self.arm_dof, s.eef_site, s.eef_body,
-            self.suction_cmd, self.held, self.detected, self.running, self.travel, self.pool, self.boxes,
-            self.observation_layout, self.state, self.env_state])
+            self.controls, self.pool, self.boxes, self.observation_layout, self.state, self.env_state])
 
     def _result(self) -> StepResult:
         return StepResult(wp.to_torch(self.state), wp.to_torch(self.env_state), wp.to_torch(self.reward), self.images)

@@ -100,6 +100,35 @@ class Events:
 
 
 @wp.struct
+class Controls:
+    """Every world's commands and what its cup and belt report: suction on (0/1), belt pass (0/1), the box held
+    (-1: none), the ray blocked (0/1), the belt running (0/1), the encoder [m]."""
+
+    suction_cmd: wp.array(dtype=int)
+    belt_pass: wp.array(dtype=int)
+    held: wp.array(dtype=int)
+    detected: wp.array(dtype=int)
+    running: wp.array(dtype=int)
+    travel: wp.array(dtype=wp.float64)
+
+
+@wp.struct
+class Rig:
+    """The cell's drives, the same in every world: the ray's sensor index, whether the belt tracks (never stops),
+    its speed [m/s], the physics step [s], the suction actuator and its off/on controls, the belt joint's addresses."""
+
+    ray: int
+    tracking: int
+    speed: float
+    dt: float
+    suction: int
+    suction_off: float
+    suction_on: float
+    belt_qpos: int
+    belt_dof: int
+
+
+@wp.struct
 class Draws:
     """Every world's episode draws by serial (``schedule.episode_draws``): colour, offset off the centre line [m],
     yaw [rad]."""
@@ -180,27 +209,23 @@ def servo_torque(res: wp.array2d(dtype=float), qfrc_bias: wp.array2d(dtype=float
 
 
 @wp.kernel
-def drive(suction_cmd: wp.array(dtype=int), belt_pass: wp.array(dtype=int), sensordata: wp.array2d(dtype=float),
-          ray: int, L: Layout, tracking: int, speed: float, dt: float, suction: int, suction_off: float,
-          suction_on: float, box_weld: wp.array(dtype=int), qpos: wp.array2d(dtype=float),
-          qvel: wp.array2d(dtype=float), belt_qpos: int, belt_dof: int, ctrl: wp.array2d(dtype=float),
-          held: wp.array(dtype=int), eq_active: wp.array2d(dtype=bool), detected: wp.array(dtype=int),
-          running: wp.array(dtype=int), travel: wp.array(dtype=wp.float64)):
+def drive(io: Controls, rig: Rig, L: Layout, pool: Pool, sim: Bodies, sensordata: wp.array2d(dtype=float),
+          ctrl: wp.array2d(dtype=float)):
     """Before each physics step: the suction valve (``SuctionGripper``), the belt and its ray
     (``conveyor.Belt.drive``), and the seal's release (``suction.VacuumSeal.update``)."""
     w = wp.tid()
-    ctrl[w, suction] = wp.where(suction_cmd[w] != 0, suction_on, suction_off)
-    distance = sensordata[w, ray]
-    detected[w] = wp.where(distance >= 0.0 and distance <= L.sensor_range, 1, 0)
-    run = belt_runs(distance, L.sensor_range, tracking, belt_pass[w])
-    running[w] = run
-    qpos[w, belt_qpos] = 0.0
-    qvel[w, belt_dof] = wp.where(run != 0, -speed, 0.0)
+    ctrl[w, rig.suction] = wp.where(io.suction_cmd[w] != 0, rig.suction_on, rig.suction_off)
+    distance = sensordata[w, rig.ray]
+    io.detected[w] = wp.where(distance >= 0.0 and distance <= L.sensor_range, 1, 0)
+    run = belt_runs(distance, L.sensor_range, rig.tracking, io.belt_pass[w])
+    io.running[w] = run
+    sim.qpos[w, rig.belt_qpos] = 0.0
+    sim.qvel[w, rig.belt_dof] = wp.where(run != 0, -rig.speed, 0.0)
     if run != 0:
-        travel[w] = travel[w] + wp.float64(speed) * wp.float64(dt)
-    if suction_cmd[w] == 0 and held[w] >= 0:
-        eq_active[w, box_weld[held[w]]] = False
-        held[w] = -1
+        io.travel[w] = io.travel[w] + wp.float64(rig.speed) * wp.float64(rig.dt)
+    if io.suction_cmd[w] == 0 and io.held[w] >= 0:
+        sim.eq_active[w, pool.weld[io.held[w]]] = False
+        io.held[w] = -1
 
 
 @wp.kernel

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from colorsort.batched.kernels import IN_PLAY, Boxes, Pool
+from colorsort.batched.kernels import IN_PLAY, Boxes, Controls, Pool
 from colorsort.cell.observation import BoxStateLayout, StateLayout
 
 
@@ -38,10 +38,8 @@ def observation_layout(state: StateLayout, box: BoxStateLayout) -> ObservationLa
 @wp.kernel
 def observe(qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), site_xpos: wp.array2d(dtype=wp.vec3),
             xquat: wp.array2d(dtype=wp.quat), arm_qpos: wp.array(dtype=int), arm_dof: wp.array(dtype=int),
-            eef_site: int, eef_body: int, suction_cmd: wp.array(dtype=int), held: wp.array(dtype=int),
-            detected: wp.array(dtype=int), running: wp.array(dtype=int), travel: wp.array(dtype=wp.float64),
-            pool: Pool, boxes: Boxes, layout: ObservationLayout, state: wp.array2d(dtype=float),
-            env_state: wp.array2d(dtype=float)):
+            eef_site: int, eef_body: int, io: Controls, pool: Pool, boxes: Boxes, layout: ObservationLayout,
+            state: wp.array2d(dtype=float), env_state: wp.array2d(dtype=float)):
     """``schema.robot_state`` and ``schema.box_state`` (``Plant.next_box_state``): ``observation.state`` and
     ``observation.environment_state`` of every world, at ``cell.observation``'s offsets."""
     w = wp.tid()
@@ -56,12 +54,12 @@ def observe(qpos: wp.array2d(dtype=float), qvel: wp.array2d(dtype=float), site_x
     state[w, layout.cup_quat + 1] = q[2]
     state[w, layout.cup_quat + 2] = q[3]
     state[w, layout.cup_quat + 3] = q[0]
-    state[w, layout.flags + 0] = float(suction_cmd[w])
-    state[w, layout.flags + 1] = wp.where(held[w] >= 0, 1.0, 0.0)
-    state[w, layout.flags + 2] = float(detected[w])
-    state[w, layout.flags + 3] = float(running[w])
+    state[w, layout.flags + 0] = float(io.suction_cmd[w])
+    state[w, layout.flags + 1] = wp.where(io.held[w] >= 0, 1.0, 0.0)
+    state[w, layout.flags + 2] = float(io.detected[w])
+    state[w, layout.flags + 3] = float(io.running[w])
     if layout.travel >= 0:
-        state[w, layout.travel] = float(travel[w])
+        state[w, layout.travel] = float(io.travel[w])
     best = int(-1)  # noqa: UP018
     for box in range(pool.size):
         if boxes.status[w, box] == IN_PLAY and (best < 0 or boxes.serial[w, box] < boxes.serial[w, best]):
