@@ -99,6 +99,7 @@ def observe_twins(n_joints: int, tracking: bool, seed: int = 0) -> tuple[np.ndar
     (kernel state, kernel box state, CPU state, CPU box state), one row per world."""
     import warp as wp
 
+    from colorsort.batched import arrays as A
     from colorsort.batched import kernels as K
     from colorsort.batched.observe import observation_layout, observe
     from colorsort.cell.boxes import BoxStatus
@@ -120,12 +121,12 @@ def observe_twins(n_joints: int, tracking: bool, seed: int = 0) -> tuple[np.ndar
     color = rng.integers(0, BOX_STATE.n_colors, (worlds, pool))
     serial = rng.permutation(worlds * pool).reshape(worlds, pool)
     with wp.ScopedDevice("cpu"):
-        pool_struct, boxes = K.Pool(), K.Boxes()
+        pool_struct, boxes = A.Pool(), A.Boxes()
         pool_struct.size, pool_struct.qpos = pool, wp.array(box_qpos.astype(np.int32), dtype=int)
         boxes.status, boxes.color = wp.array(status.astype(np.int32), dtype=int), wp.array(color.astype(np.int32),
                                                                                               dtype=int)
         boxes.serial = wp.array(serial.astype(np.int32), dtype=int)
-        io = K.Controls()
+        io = A.Controls()
         io.suction_cmd, io.held = wp.array(suction, dtype=int), wp.array(held, dtype=int)
         io.detected, io.running = wp.array(detected, dtype=int), wp.array(running, dtype=int)
         io.belt_pass, io.travel = wp.zeros(worlds, dtype=int), wp.array(travel, dtype=wp.float64)

@@ -26,6 +26,7 @@ import mujoco_warp as mjw
 import numpy as np
 import warp as wp
 
+from colorsort.batched import arrays as A
 from colorsort.batched import kernels as K
 from colorsort.batched.cameras import BatchedCameras, warp_matids
 from colorsort.batched.observe import observation_layout, observe
@@ -170,10 +171,10 @@ class BatchedCell:
         self.use_graph = use_graph
         self.seeds = np.full(n, -1, np.int64)
 
-    def _structs(self) -> tuple[K.Pool, K.Boxes, K.Bodies, K.Events, K.Draws]:
+    def _structs(self) -> tuple[A.Pool, A.Boxes, A.Bodies, A.Events, A.Draws]:
         """The per-box and per-world arrays grouped as the kernels take them (each holds the arrays above, which are
         written in place, never replaced: a captured graph keeps their addresses)."""
-        pool, boxes, bodies, events, draws = K.Pool(), K.Boxes(), K.Bodies(), K.Events(), K.Draws()
+        pool, boxes, bodies, events, draws = A.Pool(), A.Boxes(), A.Bodies(), A.Events(), A.Draws()
         pool.size, pool.qpos, pool.dof, pool.body = self.spec.pool_size, self.box_qpos, self.box_dof, self.box_body
         pool.geom, pool.weld, pool.park = self.box_geom, self.box_weld, self.park_pos
         boxes.status, boxes.color, boxes.bin, boxes.serial = self.status, self.color, self.bin_of, self.serial
@@ -184,9 +185,9 @@ class BatchedCell:
         draws.color, draws.offset, draws.yaw = self.draw_color, self.draw_offset, self.draw_yaw
         return pool, boxes, bodies, events, draws
 
-    def _drives(self) -> tuple[K.Controls, K.Rig]:
+    def _drives(self) -> tuple[A.Controls, A.Rig]:
         """Every world's commands and reports (the arrays above, in place), and the cell's drives as constants."""
-        s, io, rig = self.spec, K.Controls(), K.Rig()
+        s, io, rig = self.spec, A.Controls(), A.Rig()
         io.suction_cmd, io.belt_pass, io.held = self.suction_cmd, self.belt_pass, self.held
         io.detected, io.running, io.travel = self.detected, self.running, self.travel
         rig.ray, rig.tracking, rig.speed = int(s.ray), int(s.config.tracking), float(s.config.belt_speed)

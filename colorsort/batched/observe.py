@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import warp as wp
 
-from colorsort.batched.kernels import IN_PLAY, Boxes, Controls, Pool
+from colorsort.batched.arrays import Boxes, Controls, Pool
+from colorsort.batched.kernels import IN_PLAY
 from colorsort.cell.observation import BoxStateLayout, StateLayout
 
 
