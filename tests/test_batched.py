@@ -2,7 +2,7 @@
 
 Warp compiles MuJoCo Warp's kernels once per machine (minutes on 2 cores: docs/gpu.md) into its disk cache
 (~/.cache/warp), so only the first cell a run builds pays for it; each test then builds its own few worlds.
-The rule kernels are held to their Python twins on their own inputs, where physics is not the point.
+The rule kernels are held to their Python twins on synthetic states in ``test_twins.py``.
 """
 
 from __future__ import annotations
@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import console_script, exit_status, new_env
+from helpers import console_script, exit_status
 
 from colorsort.batched.schedule import COLOR_NAMES, episode_draws
 from colorsort.benchmark.policies import ExpertPolicy
-from colorsort.cell.referee import Outcome, Referee
-from colorsort.config import BIN_COLORS, CellLayout
+from colorsort.cell.referee import Outcome
+from colorsort.config import BIN_COLORS
 from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.variants import get_variant
 
@@ -47,160 +47,6 @@ def test_a_seed_gives_the_batched_cell_the_cpu_cells_boxes(variant):
             assert env.env.plant.lighting == draws.lighting
     finally:
         env.close()
-
-
-def referee_twins(n: int = 4000) -> tuple[np.ndarray, list[tuple[int, int]]]:
-    """The referee's verdicts on ``n`` drawn boxes (positions over the bins, the belt, its end and the floor;
-    speeds around the settling threshold): the kernel's, and the CPU cell's ``Referee.outcome``."""
-    import warp as wp
-
-    from colorsort.batched import kernels as K
-    from colorsort.batched.cell import layout_struct
-
-    @wp.kernel
-    def judge(color: wp.array(dtype=int), pos: wp.array(dtype=wp.vec3), speed: wp.array(dtype=float), L: K.Layout,
-              out: wp.array(dtype=wp.vec2i)):
-        i = wp.tid()
-        out[i] = K.outcome_of(color[i], pos[i], speed[i], L)
-
-    layout, rng = CellLayout(), np.random.default_rng(0)
-    pos = np.column_stack([rng.uniform(0.0, 1.4, n), rng.uniform(-0.6, 0.8, n), rng.uniform(0.0, 0.6, n)])
-    pos = pos.astype(np.float32)
-    speed = rng.uniform(0.0, 0.1, n).astype(np.float32)
-    color = rng.integers(0, 5, n).astype(np.int32)
-    with wp.ScopedDevice("cpu"):
-        out = wp.zeros(n, dtype=wp.vec2i)
-        wp.launch(judge, dim=n, inputs=[wp.array(color, dtype=int), wp.array(pos, dtype=wp.vec3),
-                                        wp.array(speed, dtype=float), layout_struct(layout), out])
-        got = out.numpy()
-    referee = Referee(layout, bin_capacity=4)
-    outcomes, colors = list(Outcome), list(COLOR_NAMES)
-    want = []
-    for c, p, s in zip(color, pos.astype(float), speed.astype(float), strict=True):
-        outcome, bin_color = referee.outcome(colors[c], p, s)
-        want.append((outcomes.index(outcome) if outcome else -1, BIN_COLORS.index(bin_color) if bin_color else -1))
-    return got, want
-
-
-def test_a_constant_changed_on_one_side_shows_in_the_twin_test(monkeypatch):
-    """The twin test would catch drift: the CPU referee's floor margin moved 1 cm alone (after the kernels took
-    theirs from it), verdicts differ."""
-    from colorsort.batched import kernels  # noqa: F401 - their constants taken before the change
-    from colorsort.cell import referee
-
-    monkeypatch.setattr(referee, "FLOOR_MARGIN", referee.FLOOR_MARGIN + 0.01)
-    got, want = referee_twins()
-    assert (got != np.array(want)).any()
-
-
-def observe_twins(n_joints: int, tracking: bool, seed: int = 0) -> tuple[np.ndarray, ...]:
-    """The ``observe`` kernel on drawn synthetic worlds (joint angles, cup pose, flags, boxes in play or not, their
-    serials and colours), and what the CPU cell's layout (``cell.observation``) packs from the same numbers:
-    (kernel state, kernel box state, CPU state, CPU box state), one row per world."""
-    import warp as wp
-
-    from colorsort.batched import arrays as A
-    from colorsort.batched import kernels as K
-    from colorsort.batched.observe import observation_layout, observe
-    from colorsort.cell.boxes import BoxStatus
-    from colorsort.cell.observation import BOX_STATE, StateLayout
-
-    rng, worlds, pool = np.random.default_rng(seed), 64, 4
-    layout = StateLayout(n_joints, tracking)
-    box_qpos = np.arange(pool) * 7 + n_joints + 3  # each box's free joint after the arm's and three others
-    nq = int(box_qpos[-1]) + 7
-    arm_qpos, arm_dof = rng.permutation(n_joints).astype(np.int32), rng.permutation(n_joints).astype(np.int32) + 2
-    qpos, qvel = rng.normal(size=(worlds, nq)), rng.normal(size=(worlds, nq + 2))
-    cup, quat = rng.normal(size=(worlds, 3)), rng.normal(size=(worlds, 4))  # quat as MuJoCo keeps it: w, x, y, z
-    suction, held, detected, running = (rng.integers(0, 2, worlds) for _ in range(4))
-    held = np.where(held > 0, rng.integers(0, pool, worlds), -1)
-    travel = rng.uniform(0, 5, worlds)
-    in_play, parked = K.STATUSES.index(BoxStatus.IN_PLAY), K.STATUSES.index(BoxStatus.PARKED)
-    status = rng.integers(0, len(K.STATUSES), (worlds, pool))
-    status[:8] = parked  # worlds with no box in play
-    color = rng.integers(0, BOX_STATE.n_colors, (worlds, pool))
-    serial = rng.permutation(worlds * pool).reshape(worlds, pool)
-    with wp.ScopedDevice("cpu"):
-        pool_struct, boxes = A.Pool(), A.Boxes()
-        pool_struct.size, pool_struct.qpos = pool, wp.array(box_qpos.astype(np.int32), dtype=int)
-        boxes.status, boxes.color = wp.array(status.astype(np.int32), dtype=int), wp.array(color.astype(np.int32),
-                                                                                              dtype=int)
-        boxes.serial = wp.array(serial.astype(np.int32), dtype=int)
-        io = A.Controls()
-        io.suction_cmd, io.held = wp.array(suction, dtype=int), wp.array(held, dtype=int)
-        io.detected, io.running = wp.array(detected, dtype=int), wp.array(running, dtype=int)
-        io.belt_pass, io.travel = wp.zeros(worlds, dtype=int), wp.array(travel, dtype=wp.float64)
-        state = wp.zeros((worlds, layout.size), dtype=float)
-        env_state = wp.zeros((worlds, BOX_STATE.size), dtype=float)
-        wp.launch(observe, dim=worlds, inputs=[
-            wp.array(qpos.astype(np.float32), dtype=float), wp.array(qvel.astype(np.float32), dtype=float),
-            wp.array(cup[:, None, :].astype(np.float32), dtype=wp.vec3),
-            wp.array(quat[:, None, :].astype(np.float32), dtype=wp.quat), wp.array(arm_qpos, dtype=int),
-            wp.array(arm_dof, dtype=int), 0, 0, io, pool_struct, boxes, observation_layout(layout, BOX_STATE), state,
-            env_state])
-        got_state, got_box = state.numpy(), env_state.numpy()
-    want_state, want_box = [], []
-    for w in range(worlds):
-        flags = (float(suction[w]), float(held[w] >= 0), float(detected[w]), float(running[w]))
-        want_state.append(layout.pack(qpos[w, arm_qpos], qvel[w, arm_dof], cup[w], quat[w, [1, 2, 3, 0]], flags,
-                                      travel[w] if tracking else None))
-        playing = [b for b in range(pool) if status[w, b] == in_play]
-        first = min(playing, key=lambda b: serial[w, b]) if playing else None
-        want_box.append(BOX_STATE.pack(None if first is None else int(color[w, first]),
-                                       None if first is None else qpos[w, box_qpos[first] : box_qpos[first] + 7]))
-    return got_state, got_box, np.array(want_state), np.array(want_box)
-
-
-@pytest.mark.parametrize(("n_joints", "tracking"), [(6, False), (6, True), (7, True)])
-def test_the_observe_kernel_writes_the_cpu_cells_observation_layout(n_joints, tracking):
-    """``observation.state`` and ``observation.environment_state`` as the kernel writes them, against the CPU cell's
-    layout packed from the same synthetic numbers: another arm (7 joints, the Panda's) and the tracking belt's encoder
-    move every offset, so a kernel that wrote at offsets of its own would differ."""
-    got_state, got_box, want_state, want_box = observe_twins(n_joints, tracking)
-    assert want_box[:, -1].any() and not want_box[:, -1].all()  # worlds with a box in play and without
-    np.testing.assert_allclose(got_state, want_state, rtol=1e-6, atol=1e-6)
-    np.testing.assert_allclose(got_box, want_box, rtol=1e-6, atol=1e-6)
-
-
-def test_the_rule_kernels_give_what_their_python_twins_give():
-    """The referee's verdict and the belt's run/stop rule, as Warp functions, against the CPU cell's own
-    ``Referee.outcome`` and ``conveyor.Belt.drive``."""
-    import warp as wp
-
-    from colorsort.batched import kernels as K
-
-    layout = CellLayout()
-    got, want = referee_twins()
-    assert {tuple(w) for w in want} >= {(0, 0), (1, 1), (2, -1), (3, -1), (-1, -1)}  # every verdict was drawn
-    assert (got == np.array(want)).all()
-
-    @wp.kernel
-    def belt(distance: wp.array(dtype=float), tracking: wp.array(dtype=int), belt_pass: wp.array(dtype=int),
-             sensor_range: float, out: wp.array(dtype=int)):
-        i = wp.tid()
-        out[i] = K.belt_runs(distance[i], sensor_range, tracking[i], belt_pass[i])
-
-    rng, n = np.random.default_rng(1), 4000
-    distance = rng.choice([-1.0, 0.1, 0.26, 0.3], n).astype(np.float32)  # -1: MuJoCo's "no hit"
-    tracking, belt_pass = rng.integers(0, 2, n).astype(np.int32), rng.integers(0, 2, n).astype(np.int32)
-    with wp.ScopedDevice("cpu"):
-        runs = wp.zeros(n, dtype=int)
-        wp.launch(belt, dim=n, inputs=[wp.array(distance, dtype=float), wp.array(tracking, dtype=int),
-                                       wp.array(belt_pass, dtype=int), layout.sensor_range, runs])
-        got_runs = runs.numpy()
-    env = new_env()  # the CPU cell's own belt, its ray reading set to each sample
-    try:
-        cpu_belt = env.plant.belt
-        want_runs = []
-        for d, t, p in zip(distance, tracking, belt_pass, strict=True):
-            cpu_belt.tracking, cpu_belt.belt_pass = bool(t), bool(p)
-            env.mj_data.sensordata[cpu_belt.ray] = d
-            cpu_belt.drive()
-            want_runs.append(int(cpu_belt.running))
-    finally:
-        env.close()
-    np.testing.assert_array_equal(got_runs, want_runs)
-    assert 0 < sum(want_runs) < n  # the belt both ran and stopped
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """The cell's rules as Warp kernels, one thread per world (or per contact), for ``BatchedCell``.
 
-Each kernel is the twin of a Python part of the CPU cell, named in its docstring; ``tests/test_batched.py``
+Each kernel is the twin of a Python part of the CPU cell, named in its docstring; ``tests/test_twins.py``
 holds the rule functions (``@wp.func``) to their Python twins on the same inputs. Box status, outcome and
 bin codes are the CPU cell's enum orders (``boxes.BoxStatus``, ``referee.Outcome``, ``config.BIN_COLORS``).
 """
