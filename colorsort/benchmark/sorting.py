@@ -1,6 +1,6 @@
 """The scripted expert on the cell until N boxes have left the belt, reported per box (``colorsort-sort``).
 
-``run_sort`` returns a ``SortReport``: counts per outcome, boxes per minute of sim time, the
+``run_sort`` returns a ``SortSummary``: counts per outcome, boxes per minute of sim time, the
 peak joint speed against the datasheet, and per box the colour seen, the true colour, the bin and
 the cycle time; with a video path it films the scene camera with an overlay and writes a contact
 sheet beside it.
@@ -58,7 +58,9 @@ class SortConfig:
 
 
 @dataclass
-class BoxReport:
+class SortedBox:
+    """One box that left the belt during ``colorsort-sort``."""
+
     true_color: str
     seen_color: str | None  # None: left the belt before the camera looked at it
     bin: str | None  # None: not placed in a bin
@@ -66,7 +68,9 @@ class BoxReport:
 
 
 @dataclass
-class SortReport:
+class SortSummary:
+    """What ``run_sort`` did: boxes per outcome, rates, the arm's peak speed and every box (``--json``)."""
+
     correct: int = 0
     misplaced: int = 0
     dropped: int = 0
@@ -77,7 +81,7 @@ class SortReport:
     belt_stopped_s: float = 0.0  # [s] sim time the belt stood still (0 on a tracking belt)
     let_go: int = 0  # boxes of a bin colour the tracking expert could not meet in time and let ride off
     phase_seconds: dict[str, float] = field(default_factory=dict)  # [s] sim time the expert spent in each phase
-    boxes: list[BoxReport] = field(default_factory=list)
+    boxes: list[SortedBox] = field(default_factory=list)
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -90,7 +94,7 @@ class SortLog(Observer):
     def __init__(self, env: ColorSort, expert: Expert, vmax: np.ndarray, writer: VideoWriter | None,
                  log: Callable[[str], None]):
         self.env, self.expert, self.vmax, self.writer, self.log = env, expert, vmax, writer, log
-        self.report = SortReport()
+        self.summary = SortSummary()
         self.handled: dict[int, int] = {}  # box serial -> index of the expert's cycle
         self.reported = 0
         self.thumbs: list[np.ndarray] = []
@@ -107,10 +111,10 @@ class SortLog(Observer):
             if box is not None:
                 self.handled[box] = len(expert.cycles) - 1
         phase = expert.phase.value
-        self.report.phase_seconds[phase] = self.report.phase_seconds.get(phase, 0.0) + env.control_timestep
+        self.summary.phase_seconds[phase] = self.summary.phase_seconds.get(phase, 0.0) + env.control_timestep
 
     def on_step(self, obs: dict, info: dict) -> None:
-        env, report = self.env, self.report
+        env, report = self.env, self.summary
         report.belt_stopped_s += 0.0 if info["belt_running"] else env.control_timestep
         speed = float(np.max(np.abs(obs["robot0_joint_vel"]) / self.vmax))
         report.peak_speed_ratio = max(report.peak_speed_ratio, speed)
@@ -124,7 +128,7 @@ class SortLog(Observer):
         for event in env.events[self.reported:]:
             cycle = self.expert.cycles[self.handled[event.serial]] if event.serial in self.handled else None
             cycle_time = None if cycle is None else event.time - cycle.detected_at
-            entry = BoxReport(event.color, cycle.seen_color if cycle else None, event.bin, cycle_time)
+            entry = SortedBox(event.color, cycle.seen_color if cycle else None, event.bin, cycle_time)
             report.boxes.append(entry)
             setattr(report, _counter(event.outcome), getattr(report, _counter(event.outcome)) + 1)
             n = len(report.boxes)
@@ -135,7 +139,7 @@ class SortLog(Observer):
         self.reported = len(env.events)
 
 
-def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport:
+def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortSummary:
     """Run the expert as ``config`` says and return the report; ``log`` gets one line per box."""
     task = make_config(config.preset)
     limit = sorting_time_limit(config.boxes, task)
@@ -158,7 +162,7 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
             if sort_log.thumbs and config.video:
                 save_png(Path(config.video).with_suffix(".png"), contact_sheet(sort_log.thumbs))
         env.close()
-    report = sort_log.report
+    report = sort_log.summary
     report.let_go = getattr(expert, "let_go", 0)
     report.sim_time_s = env.events[-1].time if len(env.events) >= config.boxes else env.cur_time
     report.boxes_per_minute = 60.0 * len(report.boxes) / report.sim_time_s if report.sim_time_s > 0 else 0.0
@@ -166,7 +170,7 @@ def run_sort(config: SortConfig, progress: bool = True, log=print) -> SortReport
 
 
 def _counter(outcome: Outcome) -> str:
-    """The ``SortReport`` field that counts ``outcome``."""
+    """The ``SortSummary`` field that counts ``outcome``."""
     return "correct" if outcome is Outcome.PLACED else outcome.value
 
 

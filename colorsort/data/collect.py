@@ -21,7 +21,7 @@ from tqdm import tqdm
 from colorsort.data import store
 from colorsort.data.config import CollectConfig
 from colorsort.data.recorder import EpisodeResult
-from colorsort.data.shards import PRELOAD, ShardJob, merge, merge_in_child, record, report_of, shard_name
+from colorsort.data.shards import PRELOAD, ShardJob, merge, merge_in_child, record, shard_name, summary_of
 from colorsort.executors.base import Task, TaskResult, chunks, forwarded_env
 from colorsort.executors.factory import make_executor
 
@@ -149,7 +149,7 @@ def merge_and_publish(staging: store.StagingRun) -> None:
     config, marker = staging.config, staging.marker
     shards = staging.shards()  # on disk: what every attempt, of this run or a killed one, finished
     tried, failed = staging.tried()
-    reports = [report_of(p, m) for p, m in shards]
+    reports = [summary_of(p, m) for p, m in shards]
     if any(s.kept for s in reports):
         sources = ([staging.root] if marker else []) + [Path(s.root) for s in reports if s.kept]
         merger = merge if config.executor.name == "local" and config.executor.workers == 1 else merge_in_child

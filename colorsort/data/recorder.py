@@ -2,7 +2,7 @@
 
 ``record_shard`` records a list of episode numbers into one new dataset and always finalizes it,
 so every episode it saved is loadable whatever stops it. Where its wall time goes is timed per
-stage (``ShardReport.seconds``) for ``benchmarks/bench_collect.py``.
+stage (``ShardSummary.seconds``) for ``benchmarks/bench_collect.py``.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ class EpisodeResult:
 
 
 @dataclass
-class ShardReport:
+class ShardSummary:
     """What one recorder did, and where its wall time went [s]."""
 
     root: str
@@ -85,7 +85,7 @@ def perturbed_step(hooks: list, expert: Expert, obs: dict) -> Step:
 
 class FrameWriter(Observer):
     """Adds each step's frame (the observation acted on, the stored action) to the dataset being recorded, and
-    times where the step's wall time went (``ShardReport.seconds``)."""
+    times where the step's wall time went (``ShardSummary.seconds``)."""
 
     def __init__(self, env: ColorSort, dataset: Any, cameras: tuple[str, ...], task: str, seconds: dict[str, float]):
         self.env, self.dataset, self.cameras, self.task, self.sec = env, dataset, cameras, task, seconds
@@ -112,7 +112,7 @@ class FrameWriter(Observer):
 
 
 def record_shard(config: CollectConfig, indices: list[int], root: Path,
-                 report: Callable[[EpisodeResult], None], stop: Callable[[], bool] = lambda: False) -> ShardReport:
+                 report: Callable[[EpisodeResult], None], stop: Callable[[], bool] = lambda: False) -> ShardSummary:
     """Record episodes ``indices`` into a new dataset at ``root``; always finalizes what it saved.
 
     Ctrl-C (KeyboardInterrupt) or ``stop()`` turning true abandons the episode under way and
@@ -124,7 +124,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
 
     av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's notes on every file it writes (lerobot restores
     # FFmpeg's own log callback, which prints at this level)
-    out = ShardReport(str(root))
+    out = ShardSummary(str(root))
     sec = out.seconds
     t0 = time.perf_counter()
     env = make_recording_env(config)

@@ -138,7 +138,9 @@ def psnr(a: np.ndarray, b: np.ndarray) -> float:
 
 
 @dataclass
-class ReplayReport:
+class ReplayCheck:
+    """What ``replay`` found: the dataset's episode restored frame by frame and replayed from its actions."""
+
     frames: int
     video: str | None
     sheet: str | None
@@ -196,7 +198,7 @@ def action_replay(env: ColorSort, episode: RecordedEpisode) -> tuple[list[str], 
 
 
 def replay(root: str | Path, index: int, camera: str = "scene", size: tuple[int, int] | None = None,
-           video: str | None = None, sheet: str | None = None, progress: bool = True) -> ReplayReport:
+           video: str | None = None, sheet: str | None = None, progress: bool = True) -> ReplayCheck:
     """State replay (render, compare) and action replay of one episode, as the module docstring says."""
     if camera not in CAMERAS:
         raise ConfigError(f"Unknown camera {camera!r}. Valid cameras: {list(CAMERAS)}")
@@ -216,4 +218,4 @@ def replay(root: str | Path, index: int, camera: str = "scene", size: tuple[int,
         outcomes, ok, state_error = action_replay(env, episode)
     finally:
         env.close()
-    return ReplayReport(len(frames), video, sheet, mismatches, min_psnr, mae, outcomes, state_error, ok)
+    return ReplayCheck(len(frames), video, sheet, mismatches, min_psnr, mae, outcomes, state_error, ok)

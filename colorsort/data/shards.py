@@ -21,7 +21,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from colorsort.data.config import CollectConfig
-from colorsort.data.recorder import ShardReport, record_shard
+from colorsort.data.recorder import ShardSummary, record_shard
 from colorsort.data.store import SHARD_MARKER, read_shard, write_whole
 from colorsort.errors import StageError
 from colorsort.executors.base import TaskContext
@@ -44,18 +44,18 @@ def shard_name(first: int) -> str:
     return f"shard-{first:06d}"
 
 
-def report_of(root: Path, marker: dict) -> ShardReport:
-    return ShardReport(str(root), tried=marker["tried"], kept=marker["kept"], failed=marker["failed"],
+def summary_of(root: Path, marker: dict) -> ShardSummary:
+    return ShardSummary(str(root), tried=marker["tried"], kept=marker["kept"], failed=marker["failed"],
                        interrupted=marker["interrupted"], error=marker["error"], seconds=marker["seconds"],
                        sim_state=marker["sim_state"])
 
 
-def record(job: ShardJob, ctx: TaskContext) -> ShardReport:
+def record(job: ShardJob, ctx: TaskContext) -> ShardSummary:
     """The task that records one shard (run again after its process died: it starts the shard afresh)."""
     root = Path(job.root)
     marker = read_shard(root)
     if marker is not None:  # an earlier attempt finished it and then died
-        return report_of(root, marker)
+        return summary_of(root, marker)
     if root.exists():
         shutil.rmtree(root)  # what an attempt killed while recording left
     worker = root.with_name(root.name + ".worker.json")
