@@ -381,6 +381,34 @@ def test_the_pages_shift_tables_are_those_the_summaries_and_the_registry_give():
     assert done.returncode == 0, done.stdout + done.stderr
 
 
+def test_a_randomised_recipes_seeds_are_held_to_their_targets_against_the_recipe_without():
+    """The `-dr` table: every seed's row, the seeds' mean relative success, their episodes pooled against the recipe
+    without randomisation, and each target met or missed, by how much (synthetic sweeps of 20 episodes an arm)."""
+    from colorsort.benchmark.metrics import wilson_interval
+    from colorsort.benchmark.shift_tables import randomised_table
+
+    def sweep(policy, control, **shifts):
+        def row(shift, level, won):
+            rel = won / control if shift != "none" else 1.0
+            return {"shift": shift, "level": level, "episodes": 20, "success": won / 20,
+                    "success_ci95": list(wilson_interval(won, 20)), "relative": rel}
+        return {"policy": policy, "variant": "default",
+                "rows": [row("none", 0, control)] + [row(k.replace("_", "-"), 2, v) for k, v in shifts.items()]}
+
+    table = randomised_table([sweep("baselines/x", 20, joint_noise=9, box_size=12),
+                              sweep("baselines/x-dr", 20, joint_noise=20, box_size=4),
+                              sweep("outputs/policies/x-dr-seed7", 19, joint_noise=19, box_size=10)])
+    assert "`x-dr`: 2 training seeds (`x-dr`, `x-dr-seed7`), level 2, against `x`" in table
+    assert "| shift | shipped | seed7 |" in table
+    assert "| joint-noise | 100% | 95% | 100% | 98% (87-100%), 40 ep. | 45% (26-66%) | yes |" in table
+    assert "| box-size | 20% | 50% | 36% | 35% (22-50%), 40 ep. | 60% (39-78%) | no |" in table
+    assert "- control 98% (target 95%): met" in table
+    assert "- at least 80% of the control on every shift: missed (`box-size` 36%)" in table
+    assert "- at least 90% on average: 68%, missed by 22 points" in table
+    assert "on at least half the shifts (1 of 2): on 1 (`joint-noise`), met" in table
+    assert randomised_table([sweep("baselines/x", 20)]) == "(no randomised recipe has been swept)"
+
+
 def test_geom_type_constants_are_mujocos():
     assert (BOX, CYLINDER) == (int(mujoco.mjtGeom.mjGEOM_BOX), int(mujoco.mjtGeom.mjGEOM_CYLINDER))
 

@@ -2,8 +2,8 @@
 
 A sweep's summary (``summary``) keeps what the tables need: policy, variant, seeds, the command that ran it, its
 wall time and machine, and one row per arm (``shift_sweep.sweep_rows``). Pages mark the generated parts with
-``<!-- shifts list -->``, ``<!-- shifts headline -->`` and ``<!-- shifts table -->``, each closed by
-``<!-- end shifts -->``.
+``<!-- shifts list -->``, ``<!-- shifts headline -->``, ``<!-- shifts table -->`` and ``<!-- shifts randomised -->``
+(a randomised recipe's seeds against its targets), each closed by ``<!-- end shifts -->``.
 """
 
 from __future__ import annotations
@@ -14,12 +14,16 @@ from pathlib import Path
 
 import numpy as np
 
-from colorsort.benchmark.metrics import EvalReport
+from colorsort.benchmark.metrics import EvalReport, wilson_interval
 from colorsort.benchmark.shift_sweep import sweep_rows
 from colorsort.shifts import GROUPS, SHIFTS
 
 SUMMARY_KEYS = ("policy", "variant", "seeds", "command", "wall_s", "executor", "envs", "machine", "written", "rows")
 HEATMAP_LEVEL = 2
+RANDOMISED = "-dr"  # a policy trained with the shifts' training ranges; its name less this is the same recipe without
+SEED_SUFFIX = re.compile(r"-seed\d+$")  # a training seed's sweep beside the shipped policy's (act-...-dr-seed1000)
+# docs/shifts.md's targets for a randomised recipe, on the means over its training seeds
+TARGET_CONTROL, TARGET_EVERY, TARGET_MEAN = 0.95, 0.80, 0.90
 
 
 def summary(sweep: dict) -> dict:
@@ -146,9 +150,74 @@ def shade_table() -> str:
     return "\n".join(lines)
 
 
+def randomised_table(sweeps: list[dict], level: int = HEATMAP_LEVEL) -> str:
+    """Each randomised recipe (a policy named ``*-dr``, its other training seeds ``*-dr-seedN``) at ``level``, shift by
+    shift: every seed's success, the seeds' mean relative success, their episodes pooled against the same recipe
+    without randomisation (``beats`` when the pooled 95% interval lies above the other's), then the targets met or
+    missed, by how much."""
+    by_name = {policy_name(s): s for s in sweeps}
+    blocks = []
+    for base in sorted(n for n in by_name if n.endswith(RANDOMISED)):
+        seeds = [by_name[n] for n in sorted(by_name) if SEED_SUFFIX.sub("", n) == base]
+        plain = by_name.get(base[: -len(RANDOMISED)])
+        names = [policy_name(s) for s in seeds]
+        lines = [f"`{base}`: {len(seeds)} training seeds ({', '.join(f'`{n}`' for n in names)}), level {level}"
+                 + (f", against `{policy_name(plain)}`" if plain else ""), "",
+                 "| shift | " + " | ".join("shipped" if n == base else n[len(base) + 1:] for n in names)
+                 + " | mean relative | pooled (95% CI) | without randomisation (95% CI) | beats it |",
+                 "| --- | " + "--- | " * len(seeds) + "--- | --- | --- | --- |"]
+        controls = [next(r for r in s["rows"] if r["shift"] == "none") for s in seeds]
+        shifts = [r["shift"] for r in at_level(seeds[0], level)]
+        means, beaten = {}, []
+        for shift in ["none", *shifts]:
+            rows = [next(r for r in s["rows"] if r["shift"] == shift and r["level"] == (0 if shift == "none"
+                                                                                          else level)) for s in seeds]
+            won = sum(round(r["success"] * r["episodes"]) for r in rows)
+            n = sum(r["episodes"] for r in rows)
+            lo, hi = wilson_interval(won, n)
+            rel = [r["relative"] for r in rows if r["relative"] is not None]
+            mean = float(np.mean(rel)) if len(rel) == len(rows) else None
+            if shift != "none" and mean is not None:
+                means[shift] = mean
+            other, beats = "-", "-"
+            if plain is not None:
+                o = next((r for r in plain["rows"] if r["shift"] == shift and r["level"] == rows[0]["level"]), None)
+                if o is not None:
+                    o_lo, o_hi = o["success_ci95"]
+                    other = f"{100 * o['success']:.0f}% ({100 * o_lo:.0f}-{100 * o_hi:.0f}%)"
+                    beats = "-" if shift == "none" else "yes" if lo > o_hi else "no"
+                    if shift != "none" and beats == "yes":
+                        beaten.append(shift)
+            lines.append(f"| {'control' if shift == 'none' else shift} | "
+                         + " | ".join(f"{100 * r['success']:.0f}%" for r in rows)
+                         + f" | {'-' if shift == 'none' or mean is None else f'{100 * mean:.0f}%'} | "
+                         f"{100 * won / n:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%), {n} ep. | {other} | {beats} |")
+        control = float(np.mean([r["success"] for r in controls]))
+        below = {k: v for k, v in means.items() if v < TARGET_EVERY}
+        overall = float(np.mean(list(means.values()))) if means else 0.0
+        met = lambda ok: "met" if ok else "missed"  # noqa: E731
+        lines += ["", f"- control {100 * control:.0f}% (target {100 * TARGET_CONTROL:.0f}%): "
+                  f"{met(control >= TARGET_CONTROL)}",
+                  f"- at least {100 * TARGET_EVERY:.0f}% of the control on every shift: {met(not below)}"
+                  + (" (" + ", ".join(f"`{k}` {100 * v:.0f}%" for k, v in sorted(below.items(), key=lambda kv: kv[1]))
+                     + ")" if below else ""),
+                  f"- at least {100 * TARGET_MEAN:.0f}% on average: {100 * overall:.0f}%, "
+                  f"{met(overall >= TARGET_MEAN)}" + ("" if overall >= TARGET_MEAN
+                                                      else f" by {100 * (TARGET_MEAN - overall):.0f} points")]
+        if plain is not None:
+            half = -(-len(shifts) // 2)
+            lines.append(f"- beats `{policy_name(plain)}` beyond the intervals on at least half the shifts ({half} of "
+                         f"{len(shifts)}): on {len(beaten)}"
+                         + (f" ({', '.join(f'`{b}`' for b in beaten)})" if beaten else "")
+                         + f", {met(len(beaten) >= half)}")
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks) if blocks else "(no randomised recipe has been swept)"
+
+
 def fill(text: str, sweeps: list[dict]) -> str:
     """``text`` with its marked regions (the shift list, the headline, the table) rewritten."""
     parts = {"list": shift_list(), "shades": shade_table(), "headline": headline(sweeps),
+             "randomised": randomised_table(sweeps),
              "table": full_table(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
     for mark, body in parts.items():
         pattern = re.compile(rf"(<!-- shifts {mark} -->\n).*?(<!-- end shifts -->)", flags=re.S)
