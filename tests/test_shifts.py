@@ -398,6 +398,7 @@ def test_a_randomised_recipes_seeds_are_held_to_their_targets_against_the_recipe
     table = randomised_table([sweep("baselines/x", 20, joint_noise=9, box_size=12),
                               sweep("baselines/x-dr", 20, joint_noise=20, box_size=4),
                               sweep("outputs/policies/x-dr-seed7", 19, joint_noise=19, box_size=10)])
+    low = randomised_table([sweep("baselines/x-dr", 17, joint_noise=20)])
     assert "`x-dr`: 2 training seeds (`x-dr`, `x-dr-seed7`), level 2, against `x`" in table
     assert "| shift | shipped | seed7 |" in table
     assert "| joint-noise | 100% | 95% | 100% | 98% (87-100%), 40 ep. | 45% (26-66%) | yes |" in table
@@ -406,6 +407,9 @@ def test_a_randomised_recipes_seeds_are_held_to_their_targets_against_the_recipe
     assert "- at least 80% of the control on every shift: missed (`box-size` 36%)" in table
     assert "- at least 90% on average: 68%, missed by 22 points" in table
     assert "on at least half the shifts (1 of 2): on 1 (`joint-noise`), met" in table
+    # a shift above its control counts 100% in a mean; a control below target is missed by the points it lacks
+    assert "| joint-noise | 100% | 100% | 118% | - |" not in low and "| joint-noise | 100% | 100% |" in low
+    assert "- control 85% (target 95%): missed by 10 points" in low and "90% on average: 100%, met" in low
     assert randomised_table([sweep("baselines/x", 20)]) == "(no randomised recipe has been swept)"
 
 

@@ -26,6 +26,12 @@ SEED_SUFFIX = re.compile(r"-seed\d+$")  # a training seed's sweep beside the shi
 TARGET_CONTROL, TARGET_EVERY, TARGET_MEAN = 0.95, 0.80, 0.90
 
 
+def mean_relative(relatives: list[float]) -> float:
+    """The mean of relative successes, each counted at most 1 (100%): a shift on which a policy beat its control (by
+    chance, on a few episodes) does not make up for one it failed."""
+    return float(np.mean([min(r, 1.0) for r in relatives]))
+
+
 def summary(sweep: dict) -> dict:
     """What the tables keep of a ``--sweep --json`` file (its per-episode reports stay in outputs/), the rows
     computed afresh from its reports."""
@@ -49,7 +55,8 @@ def at_level(sweep: dict, level: int) -> list[dict]:
 
 
 def headline(sweeps: list[dict]) -> str:
-    """One line per policy: control success, mean relative success at level 2, worst shift there."""
+    """One line per policy: control success, mean relative success at level 2 (``mean_relative``), worst shift
+    there."""
     lines = ["| policy | variant | control | mean relative success at level 2 | worst shift at level 2 |",
              "| --- | --- | --- | --- | --- |"]
     for s in sweeps:
@@ -61,7 +68,7 @@ def headline(sweeps: list[dict]) -> str:
             lines.append(f"{first} - | - |")
             continue
         worst = min(rows, key=lambda r: r["relative"])
-        mean = float(np.mean([r["relative"] for r in rows]))
+        mean = mean_relative([r["relative"] for r in rows])
         lines.append(f"{first} {100 * mean:.0f}% over {len(rows)} shifts | `{worst['shift']}` "
                      f"{100 * worst['relative']:.0f}% |")
     return "\n".join(lines)
@@ -176,7 +183,7 @@ def randomised_table(sweeps: list[dict], level: int = HEATMAP_LEVEL) -> str:
             n = sum(r["episodes"] for r in rows)
             lo, hi = wilson_interval(won, n)
             rel = [r["relative"] for r in rows if r["relative"] is not None]
-            mean = float(np.mean(rel)) if len(rel) == len(rows) else None
+            mean = mean_relative(rel) if len(rel) == len(rows) else None
             if shift != "none" and mean is not None:
                 means[shift] = mean
             other, beats = "-", "-"
@@ -194,16 +201,16 @@ def randomised_table(sweeps: list[dict], level: int = HEATMAP_LEVEL) -> str:
                          f"{100 * won / n:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%), {n} ep. | {other} | {beats} |")
         control = float(np.mean([r["success"] for r in controls]))
         below = {k: v for k, v in means.items() if v < TARGET_EVERY}
-        overall = float(np.mean(list(means.values()))) if means else 0.0
+        overall = mean_relative(list(means.values())) if means else 0.0
         met = lambda ok: "met" if ok else "missed"  # noqa: E731
+        short = lambda value, target: "" if value >= target else f" by {100 * (target - value):.0f} points"  # noqa: E731
         lines += ["", f"- control {100 * control:.0f}% (target {100 * TARGET_CONTROL:.0f}%): "
-                  f"{met(control >= TARGET_CONTROL)}",
+                  f"{met(control >= TARGET_CONTROL)}{short(control, TARGET_CONTROL)}",
                   f"- at least {100 * TARGET_EVERY:.0f}% of the control on every shift: {met(not below)}"
                   + (" (" + ", ".join(f"`{k}` {100 * v:.0f}%" for k, v in sorted(below.items(), key=lambda kv: kv[1]))
                      + ")" if below else ""),
                   f"- at least {100 * TARGET_MEAN:.0f}% on average: {100 * overall:.0f}%, "
-                  f"{met(overall >= TARGET_MEAN)}" + ("" if overall >= TARGET_MEAN
-                                                      else f" by {100 * (TARGET_MEAN - overall):.0f} points")]
+                  f"{met(overall >= TARGET_MEAN)}{short(overall, TARGET_MEAN)}"]
         if plain is not None:
             half = -(-len(shifts) // 2)
             lines.append(f"- beats `{policy_name(plain)}` beyond the intervals on at least half the shifts ({half} of "
