@@ -81,6 +81,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
 	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
 	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
+	$(VENV)/bin/python benchmarks/bench_sweep.py
 	$(VENV)/bin/python benchmarks/bench_ci.py
 	$(VENV)/bin/python benchmarks/bench_ci.py --only compile
 	$(VENV)/bin/python benchmarks/bench_render_parity.py
