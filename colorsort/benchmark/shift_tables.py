@@ -42,8 +42,9 @@ def summary(sweep: dict) -> dict:
 
 
 def load(folder: Path) -> list[dict]:
-    """Every sweep summary in ``folder`` (``*.json``), by policy name."""
-    return sorted((json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))), key=lambda s: s["policy"])
+    """Every sweep summary in ``folder`` (``*.json``), by policy name (a training seed's row beside its policy's)."""
+    return sorted((json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))),
+                  key=lambda s: (policy_name(s), s["variant"]))
 
 
 def policy_name(sweep: dict) -> str:
