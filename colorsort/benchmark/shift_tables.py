@@ -158,6 +158,27 @@ def shade_table() -> str:
     return "\n".join(lines)
 
 
+def arm(sweep: dict, shift: str, level: int) -> dict | None:
+    """A sweep's row of ``shift`` at ``level`` (``none`` at 0: the control), or None."""
+    return next((r for r in sweep["rows"] if r["shift"] == shift and r["level"] == level), None)
+
+
+def arms(sweeps: list[dict], shift: str, level: int) -> list[dict]:
+    """Every sweep's row of ``shift`` at ``level``; ValueError naming the shift where a sweep lacks it."""
+    rows = [arm(s, shift, level) for s in sweeps]
+    missing = [policy_name(s) for s, r in zip(sweeps, rows, strict=True) if r is None]
+    if missing:
+        raise ValueError(f"{shift} at level {level} is missing from the sweeps of {missing}")
+    return [r for r in rows if r is not None]
+
+
+def verdict(value: float, target: float, by_points: bool = True) -> str:
+    """"met", or "missed" (with ``by_points``, by how many percentage points)."""
+    if value >= target:
+        return "met"
+    return f"missed by {100 * (target - value):.0f} points" if by_points else "missed"
+
+
 def randomised_table(sweeps: list[dict], level: int = HEATMAP_LEVEL) -> str:
     """Each randomised recipe (a policy named ``*-dr``, its other training seeds ``*-dr-seedN``) at ``level``, shift by
     shift: every seed's success, the seeds' mean relative success, their episodes pooled against the same recipe
@@ -166,60 +187,53 @@ def randomised_table(sweeps: list[dict], level: int = HEATMAP_LEVEL) -> str:
     by_name = {policy_name(s): s for s in sweeps}
     blocks = []
     for base in sorted(n for n in by_name if n.endswith(RANDOMISED)):
-        seeds = [by_name[n] for n in sorted(by_name) if SEED_SUFFIX.sub("", n) == base]
-        plain = by_name.get(base[: -len(RANDOMISED)])
-        names = [policy_name(s) for s in seeds]
+        names = [n for n in sorted(by_name) if SEED_SUFFIX.sub("", n) == base]
+        seeds, plain = [by_name[n] for n in names], by_name.get(base[: -len(RANDOMISED)])
         lines = [f"`{base}`: {len(seeds)} training seeds ({', '.join(f'`{n}`' for n in names)}), level {level}"
                  + (f", against `{policy_name(plain)}`" if plain else ""), "",
                  "| shift | " + " | ".join("shipped" if n == base else n[len(base) + 1:] for n in names)
                  + " | mean relative | pooled (95% CI) | without randomisation (95% CI) | beats it |",
                  "| --- | " + "--- | " * len(seeds) + "--- | --- | --- | --- |"]
-        controls = [next(r for r in s["rows"] if r["shift"] == "none") for s in seeds]
-        shifts = [r["shift"] for r in at_level(seeds[0], level)]
         means, beaten = {}, []
-        for shift in ["none", *shifts]:
-            rows = [next(r for r in s["rows"] if r["shift"] == shift and r["level"] == (0 if shift == "none"
-                                                                                          else level)) for s in seeds]
-            won = sum(round(r["success"] * r["episodes"]) for r in rows)
-            n = sum(r["episodes"] for r in rows)
+        shifts = [r["shift"] for r in at_level(seeds[0], level)]
+        for shift, lv in [("none", 0)] + [(name, level) for name in shifts]:
+            rows = arms(seeds, shift, lv)
+            won, n = sum(round(r["success"] * r["episodes"]) for r in rows), sum(r["episodes"] for r in rows)
             lo, hi = wilson_interval(won, n)
-            rel = [r["relative"] for r in rows if r["relative"] is not None]
-            mean = mean_relative(rel) if len(rel) == len(rows) else None
-            if shift != "none" and mean is not None:
-                means[shift] = mean
-            other, beats = "-", "-"
-            if plain is not None:
-                o = next((r for r in plain["rows"] if r["shift"] == shift and r["level"] == rows[0]["level"]), None)
-                if o is not None:
-                    o_lo, o_hi = o["success_ci95"]
-                    other = f"{100 * o['success']:.0f}% ({100 * o_lo:.0f}-{100 * o_hi:.0f}%)"
-                    beats = "-" if shift == "none" else "yes" if lo > o_hi else "no"
-                    if shift != "none" and beats == "yes":
-                        beaten.append(shift)
+            other = arm(plain, shift, lv) if plain else None
+            if shift != "none" and all(r["relative"] is not None for r in rows):
+                means[shift] = mean_relative([r["relative"] for r in rows])
+            if shift != "none" and other is not None and lo > other["success_ci95"][1]:
+                beaten.append(shift)
             lines.append(f"| {'control' if shift == 'none' else shift} | "
                          + " | ".join(f"{100 * r['success']:.0f}%" for r in rows)
-                         + f" | {'-' if shift == 'none' or mean is None else f'{100 * mean:.0f}%'} | "
-                         f"{100 * won / n:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%), {n} ep. | {other} | {beats} |")
-        control = float(np.mean([r["success"] for r in controls]))
-        below = {k: v for k, v in means.items() if v < TARGET_EVERY}
-        overall = mean_relative(list(means.values())) if means else 0.0
-        met = lambda ok: "met" if ok else "missed"  # noqa: E731
-        short = lambda value, target: "" if value >= target else f" by {100 * (target - value):.0f} points"  # noqa: E731
-        lines += ["", f"- control {100 * control:.0f}% (target {100 * TARGET_CONTROL:.0f}%): "
-                  f"{met(control >= TARGET_CONTROL)}{short(control, TARGET_CONTROL)}",
-                  f"- at least {100 * TARGET_EVERY:.0f}% of the control on every shift: {met(not below)}"
-                  + (" (" + ", ".join(f"`{k}` {100 * v:.0f}%" for k, v in sorted(below.items(), key=lambda kv: kv[1]))
-                     + ")" if below else ""),
-                  f"- at least {100 * TARGET_MEAN:.0f}% on average: {100 * overall:.0f}%, "
-                  f"{met(overall >= TARGET_MEAN)}{short(overall, TARGET_MEAN)}"]
-        if plain is not None:
-            half = -(-len(shifts) // 2)
-            lines.append(f"- beats `{policy_name(plain)}` beyond the intervals on at least half the shifts ({half} of "
-                         f"{len(shifts)}): on {len(beaten)}"
-                         + (f" ({', '.join(f'`{b}`' for b in beaten)})" if beaten else "")
-                         + f", {met(len(beaten) >= half)}")
+                         + f" | {f'{100 * means[shift]:.0f}%' if shift in means else '-'} | "
+                         f"{100 * won / n:.0f}% ({100 * lo:.0f}-{100 * hi:.0f}%), {n} ep. | "
+                         + ("-" if other is None else f"{100 * other['success']:.0f}% "
+                            f"({100 * other['success_ci95'][0]:.0f}-{100 * other['success_ci95'][1]:.0f}%)")
+                         + f" | {'-' if shift == 'none' or other is None else 'yes' if shift in beaten else 'no'} |")
+        lines += [""] + target_lines(seeds, shifts, means, beaten, plain)
         blocks.append("\n".join(lines))
     return "\n\n".join(blocks) if blocks else "(no randomised recipe has been swept)"
+
+
+def target_lines(seeds: list[dict], shifts: list[str], means: dict[str, float], beaten: list[str],
+                 plain: dict | None) -> list[str]:
+    """docs/shifts.md's targets for a randomised recipe, each met or missed: the seeds' mean control, each shift's and
+    the overall mean relative success, and how many of ``shifts`` it beats the recipe without randomisation on."""
+    control = float(np.mean([r["success"] for r in arms(seeds, "none", 0)]))
+    below = sorted(((v, k) for k, v in means.items() if v < TARGET_EVERY))
+    overall = mean_relative(list(means.values())) if means else 0.0
+    lines = [f"- control {100 * control:.0f}% (target {100 * TARGET_CONTROL:.0f}%): {verdict(control, TARGET_CONTROL)}",
+             f"- at least {100 * TARGET_EVERY:.0f}% of the control on every shift: {'missed' if below else 'met'}"
+             + (" (" + ", ".join(f"`{k}` {100 * v:.0f}%" for v, k in below) + ")" if below else ""),
+             f"- at least {100 * TARGET_MEAN:.0f}% on average: {100 * overall:.0f}%, {verdict(overall, TARGET_MEAN)}"]
+    if plain is not None:
+        half = -(-len(shifts) // 2)
+        which = f" ({', '.join(f'`{b}`' for b in beaten)})" if beaten else ""
+        lines.append(f"- beats `{policy_name(plain)}` beyond the intervals on at least half the shifts ({half} of "
+                     f"{len(shifts)}): on {len(beaten)}{which}, {verdict(len(beaten), half, by_points=False)}")
+    return lines
 
 
 def fill(text: str, sweeps: list[dict]) -> str:
