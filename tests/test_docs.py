@@ -7,7 +7,6 @@ a docs page's block, so every command a user reads is one a test ran.
 
 from __future__ import annotations
 
-import os
 import re
 import shlex
 import subprocess
@@ -15,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers import python_script
 
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
@@ -114,11 +114,12 @@ def test_readmes_shell_blocks_are_the_docs_tested_ones_or_run_here():
 
 
 def test_readmes_python_snippet_runs(tmp_path):
+    """The snippet run as a script in this process."""
     (snippet,) = readme_blocks("python")
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-    result = subprocess.run([sys.executable, "-c", snippet + "\nassert not done and reward >= 0\n"], cwd=tmp_path,
-                            env=env, capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stderr[-3000:]
+    script = tmp_path / "snippet.py"
+    script.write_text(snippet + "\nassert not done and reward >= 0\nenv.close()\n")
+    result = python_script(script, [], tmp_path)
+    assert result.returncode == 0, (result.stdout + result.stderr)[-3000:]
 
 
 @pytest.mark.slow

@@ -2,12 +2,10 @@
 the scores tables written from scores.json."""
 
 import json
-import os
-import subprocess
 
 import pytest
 from baseline_common import REPO, SHIPPED, baseline, run, score_row, scores
-from helpers import exit_status
+from helpers import console_script, exit_status
 
 from colorsort.cli import baseline as colorsort_baseline
 from colorsort.data.perturbations.late_pass import LatePass
@@ -176,7 +174,7 @@ def test_bad_settings_name_the_valid_choices(tmp_path, capsys):
     assert exit_status(main, ["--until", "later"]) == 2
 
 
-def test_baseline_help_shows_a_flag_for_every_recipe_field_and_perturbation():
+def test_baseline_help_shows_a_flag_for_every_recipe_field_and_perturbation(monkeypatch, tmp_path):
     """``colorsort-baseline --help``: the nested fields of the command's configuration (each with its comment and the
     chosen recipe's value), ``--policy.type``'s kinds and the perturbation registry's flags; ``Recipe.override``
     refuses an unknown key."""
@@ -184,8 +182,10 @@ def test_baseline_help_shows_a_flag_for_every_recipe_field_and_perturbation():
 
     from colorsort.data.perturbations import PERTURBATIONS
 
-    help_text = subprocess.run(baseline("--recipe", "camera-snapshot", "--help"), capture_output=True, text=True,
-                               env={**os.environ, "COLUMNS": "1000"}, timeout=60).stdout
+    monkeypatch.setenv("COLUMNS", "1000")  # one line per flag
+    done = console_script("colorsort-baseline", ["--recipe", "camera-snapshot", "--help"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    help_text = done.stdout
     recipe = get_recipe("camera-snapshot")
     for section in ("demos", "policy", "training", "dagger", "evaluation"):
         for f in fields(getattr(recipe, section)):
