@@ -16,6 +16,8 @@ from colorsort.cell.boxes import SPAWN_CLEAR, SPAWN_GAP, BoxStatus
 from colorsort.cell.referee import FLOOR_MARGIN, Outcome
 from colorsort.config import BIN_COLORS
 
+wp.set_module_options({"enable_backward": False})  # nothing differentiates the cell: half the compile
+
 # The CPU cell's enums and rule constants, derived here, never restated: a change there is a change here.
 STATUSES = list(BoxStatus)  # the box status codes (the sim state's order)
 PARKED, IN_PLAY, IN_BIN = (wp.constant(STATUSES.index(s)) for s in

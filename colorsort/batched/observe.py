@@ -9,6 +9,8 @@ from colorsort.batched.arrays import Boxes, Controls, Pool
 from colorsort.batched.kernels import IN_PLAY
 from colorsort.cell.observation import BoxStateLayout, StateLayout
 
+wp.set_module_options({"enable_backward": False})  # nothing differentiates the cell: half the compile
+
 
 @wp.struct
 class ObservationLayout:
