@@ -2,7 +2,8 @@
 
 A cached stage's key holds the versions of the code that made its data beside its typed settings
 (``colorsort.training.cache``), so a change to the expert names new demo folders instead of reusing the old
-expert's. ``tests/test_versions.py`` fails when a part's behaviour fingerprint changes and its version does not
+expert's; a sweep's journal of finished episodes holds them too (``colorsort.benchmark.sweep_journal``).
+``tests/test_versions.py`` fails when a part's behaviour fingerprint changes and its version does not
 (``python tests/fingerprints.py --write`` records the new one with the bumped version).
 """
 
@@ -11,8 +12,9 @@ from __future__ import annotations
 EXPERT = 1  # colorsort/expert: the scripted demonstrator's actions, from what it sees
 CELL = 1  # colorsort/cell: physics, the belt, the seal, the referee, the box stream, rendering
 RECORDER = 1  # colorsort/data: what a recorded frame and a dataset's metadata hold
+SHIFTS = 1  # colorsort/shifts: what each held-out shift draws and changes at each level
 
-VERSIONS: dict[str, int] = {"expert": EXPERT, "cell": CELL, "recorder": RECORDER}
+VERSIONS: dict[str, int] = {"expert": EXPERT, "cell": CELL, "recorder": RECORDER, "shifts": SHIFTS}
 
 
 def code_versions(*parts: str) -> dict[str, int]:

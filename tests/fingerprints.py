@@ -29,7 +29,7 @@ from colorsort import versions
 
 RECORDED = Path(__file__).parent / "data" / "fingerprints.json"
 DEPENDS: dict[str, tuple[str, ...]] = {"cell": ("cell",), "expert": ("expert", "cell"),
-                                       "recorder": ("recorder", "cell")}
+                                       "recorder": ("recorder", "cell"), "shifts": ("shifts", "cell")}
 
 
 def digest(values: object) -> str:
@@ -105,7 +105,27 @@ def recorder() -> str:
         env.close()
 
 
-FINGERPRINTS: dict[str, Callable[[], str]] = {"cell": cell, "expert": expert, "recorder": recorder}
+def shifts() -> str:
+    """Every shift at level 3 at once (``all:3``: each draws as it would alone) on a shift seed: the values drawn,
+    the model's shifted fields (to 1e-4) and the state after 1 s of belt with the arm held at home (0.1 mm, 1 mrad);
+    the camera images' shifts (noise, blur) by their drawn values."""
+    from colorsort.shifts.episode import MODEL_FIELDS
+
+    env = make(shift="all:3")
+    try:
+        env.reset(seed=30000)
+        low, high = env.action_spec
+        action = np.clip(np.concatenate([env.robot_spec.home, [-1.0, 1.0]]), low, high)
+        for _ in range(20):
+            env.step(action)
+        model = {f: rounded(getattr(env.mj_model, f), 1e-4) for f in MODEL_FIELDS}
+        drawn = json.loads(json.dumps(env.shifts.record, default=lambda v: rounded(v, 1e-4)))
+        return digest({"drawn": drawn, "model": model, "state": rounded(env.get_sim_state(), 1e-4)})
+    finally:
+        env.close()
+
+
+FINGERPRINTS: dict[str, Callable[[], str]] = {"cell": cell, "expert": expert, "recorder": recorder, "shifts": shifts}
 
 
 def versions_of(part: str) -> dict[str, int]:

@@ -501,6 +501,51 @@ def test_a_sweep_in_small_writes_its_table_and_heatmap(tmp_path, capsys):
     assert (pages / "shift_heatmap.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
+def test_an_interrupted_sweep_resumes_from_its_journal_and_gives_the_episodes_of_a_whole_run(tmp_path, capsys,
+                                                                                              monkeypatch):
+    """Each finished episode is in ``<json>.partial.jsonl`` as it arrives; a sweep stopped after three of its four
+    episodes (the expert failing on the fourth) resumes with ``--resume`` and runs only that one: the rows and
+    episodes of a whole run. Without --resume an existing journal is refused, as is one of another sweep; a line
+    cut short by a kill is dropped and its episode runs again."""
+    from colorsort.benchmark.evaluate import EpisodeRunner
+    from colorsort.benchmark.sweep_journal import journal_path
+
+    def argv(out, *more):
+        return ["--policy", "expert", "--variant", "default", "--sweep", "--sweep-shifts", "image-noise", "--levels",
+                "2", "--episodes", "2", "--episode-length", "20", "--json", str(out), *more]
+
+    whole, out = tmp_path / "whole.json", tmp_path / "sweep.json"
+    assert exit_status(eval_main, argv(whole)) == 0 and not journal_path(whole).exists()
+    episode, calls = EpisodeRunner.episode, []
+
+    def failing_fourth(self, seed):
+        calls.append(seed)
+        if len(calls) == 4:
+            raise RuntimeError("the machine went away")
+        return episode(self, seed)
+
+    monkeypatch.setattr(EpisodeRunner, "episode", failing_fourth)
+    assert exit_status(eval_main, argv(out)) == 1 and not out.exists()
+    journal = journal_path(out)
+    lines = journal.read_text().splitlines()
+    assert len(lines) == 1 + 3 and json.loads(lines[0])["versions"]["shifts"] >= 1
+    monkeypatch.setattr(EpisodeRunner, "episode", episode)
+    capsys.readouterr()
+    assert exit_status(eval_main, argv(out)) == 2 and "--resume" in capsys.readouterr().err  # nothing discarded
+    assert exit_status(eval_main, argv(out, "--episode-length", "30", "--resume")) == 2
+    assert "episode_length: 20 there, 30 now" in capsys.readouterr().err
+    journal.write_text("\n".join(lines[:-1]) + "\n" + lines[-1][:40])  # the third line cut short by a kill
+    calls.clear()
+    monkeypatch.setattr(EpisodeRunner, "episode", failing_fourth)  # counts the episodes run (fails a fourth)
+    assert exit_status(eval_main, argv(out, "--resume")) == 0
+    assert len(calls) == 2 and "resuming: 2 of the 4 episodes" in capsys.readouterr().out
+    done, reference = json.loads(out.read_text()), json.loads(whole.read_text())
+    assert done["rows"] == reference["rows"] and done["resumed_episodes"] == 2
+    assert [r["per_episode"] for r in done["reports"]] == [r["per_episode"] for r in reference["reports"]]
+    assert not journal.exists()  # the JSON is written: the journal has served
+
+
 # ------------------------------------------------------------------ docs/shifts.md's commands, as written
 PAGE = ROOT / "docs" / "shifts.md"
 

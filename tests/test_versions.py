@@ -58,3 +58,10 @@ def test_workers_key_nothing_and_the_key_holds_the_code_versions():
 
 def test_the_recorded_fingerprints_file_names_every_version():
     assert set(json.loads(Path(RECORDED).read_text())) == set(versions.VERSIONS)
+
+
+def test_demos_recorded_under_the_shifts_training_ranges_are_keyed_on_the_shifts_version(monkeypatch):
+    randomised, plain = part_name("camera-snapshot-dr"), part_name()
+    monkeypatch.setitem(versions.VERSIONS, "shifts", versions.SHIFTS + 1)
+    assert part_name("camera-snapshot-dr") != randomised  # demos of other shifts are never reused
+    assert part_name() == plain  # demos recorded without shifts keep their key

@@ -182,17 +182,22 @@ def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(
 
 
 def run_jobs(tasks: list[tuple[str, Callable, Any]], episodes: int, executor: ExecutorConfig, progress: bool,
-             desc: str, with_attempts: bool = False) -> list:
+             desc: str, with_attempts: bool = False, on_message: Callable[[Any], None] | None = None) -> list:
     """Run ``(key, function, job)`` tasks on ``executor`` with a progress bar of ``episodes`` (each task sends one
-    message an episode); each task's value in order (its ``TaskResult`` with ``with_attempts``).
+    message an episode, which ``on_message`` is also given as it arrives); each task's value in order (its
+    ``TaskResult`` with ``with_attempts``).
 
     Raises:
         RuntimeError: a task failed (its traceback), or the run was interrupted.
     """
     bar = tqdm(total=episodes, desc=desc, unit="episode", disable=not progress)
     try:
-        results = make_executor(executor, PRELOAD, forwarded_env()).run([Task(*t) for t in tasks],
-                                                                         lambda _: bar.update())
+        def message(m: Any) -> None:
+            bar.update()
+            if on_message is not None:
+                on_message(m)
+
+        results = make_executor(executor, PRELOAD, forwarded_env()).run([Task(*t) for t in tasks], message)
     finally:
         bar.close()
     failed = [r for r in results if not r.ok]

@@ -10,6 +10,7 @@ to a point there).
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.evaluate import EpisodeRunner, EvalConfig, run_jobs
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec
+from colorsort.benchmark.sweep_journal import Key
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.errors import ConfigError
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig, TaskContext, chunks
@@ -72,7 +74,8 @@ class SweepJob:
 
 
 def run_sweep_job(job: SweepJob, ctx: TaskContext) -> list[tuple[int, EpisodeResult]]:
-    """The task: one env and one policy, the job's episodes in order, the env's shifts switched between arms."""
+    """The task: one env and one policy, the job's episodes in order, the env's shifts switched between arms;
+    each finished episode sent as ``(arm index, result)`` (the journal writes it as it arrives)."""
     runner = EpisodeRunner(job.settings)
     results = []
     try:
@@ -80,7 +83,7 @@ def run_sweep_job(job: SweepJob, ctx: TaskContext) -> list[tuple[int, EpisodeRes
             if shift != runner.env.shift:
                 runner.env.set_shift(shift)
             results.append((arm, runner.episode(seed)))
-            ctx.send(job.settings.variant)
+            ctx.send(results[-1])
     finally:
         runner.close()
     return results
@@ -89,23 +92,30 @@ def run_sweep_job(job: SweepJob, ctx: TaskContext) -> list[tuple[int, EpisodeRes
 def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE,
               cameras: tuple[str, ...] = DEFAULT_CAMERAS, episode_length: int | None = None,
               executor: ExecutorConfig = ExecutorConfig(), shard_size: int = DEFAULT_SHARD_SIZE,
-              progress: bool = True) -> list[EvalReport]:
+              progress: bool = True, done: Mapping[Key, EpisodeResult] | None = None,
+              on_episode: Callable[[str, EpisodeResult], None] | None = None) -> list[EvalReport]:
     """Every arm's report, in order (the control's ``shift`` is ``none``); the same whatever the executor, its
-    workers and ``shard_size`` (episodes a job, at most)."""
+    workers and ``shard_size`` (episodes a job, at most). Episodes in ``done`` (by arm shift and seed: a
+    ``SweepJournal``'s) are not run again; ``on_episode(arm shift, result)`` is called as each new one finishes."""
     check_policy_spec(policy)
     get_variant(variant)
+    done = done or {}
     path = policy if policy in ("expert", "random") else str(Path(policy).resolve())
     settings = EvalConfig(path, variant, image_size, tuple(cameras), episode_length)
     episodes = [(k, () if arm.shift == CONTROL else (arm.shift,), seed)
-                for k, arm in enumerate(arms) for seed in SHIFT_SEEDS[: arm.episodes]]
+                for k, arm in enumerate(arms) for seed in SHIFT_SEEDS[: arm.episodes] if (arm.shift, seed) not in done]
     jobs = [SweepJob(settings, tuple(block)) for block in chunks(episodes, shard_size, executor.workers)]
+
+    def finished(message: tuple[int, EpisodeResult]) -> None:
+        if on_episode is not None:
+            on_episode(arms[message[0]].shift, message[1])
+
     results = run_jobs([(job.key, run_sweep_job, job) for job in jobs], len(episodes), executor, progress,
-                       desc=f"{policy} on {variant}: {len(arms)} arms")
-    per: list[list[EpisodeResult]] = [[] for _ in arms]
-    for arm, result in (pair for job_results in results for pair in job_results):
-        per[arm].append(result)
-    return [aggregate(policy, variant, rs, shift_label(parse_shifts(() if a.shift == CONTROL else (a.shift,))))
-            for a, rs in zip(arms, per, strict=True)]
+                       desc=f"{policy} on {variant}: {len(arms)} arms", on_message=finished) if jobs else []
+    ran = {(arms[k].shift, r.seed): r for job_results in results for k, r in job_results}
+    return [aggregate(policy, variant, [done.get((a.shift, s)) or ran[(a.shift, s)] for s in SHIFT_SEEDS[: a.episodes]],
+                      shift_label(parse_shifts(() if a.shift == CONTROL else (a.shift,))))
+            for a in arms]
 
 
 def relative(report: EvalReport, control: EvalReport) -> tuple[float | None, tuple[float, float] | None]:

@@ -35,7 +35,8 @@ cell's renderer (docs/gpu.md).
 (docs/shifts.md) on the shift evaluation seeds (30000 on); the printout, ``--json`` and ``--report`` name the
 shift, and each episode's record holds the values drawn for it. ``--sweep`` runs the control and every shift at
 every level on the same seeds (``--episodes`` for the control and level 2, ``--side-episodes`` for levels 1 and 3)
-and prints one table (``--json``: every arm's report and the table's rows).
+and prints one table (``--json``: every arm's report and the table's rows); with ``--json`` each finished episode
+is written to ``<json>.partial.jsonl`` as it arrives, and ``--resume`` runs only the episodes it lacks.
 Exit status 0 when it ran, 1 when it failed or was interrupted, 2 for bad arguments.
 """
 
@@ -55,6 +56,7 @@ from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
 from colorsort.benchmark.report_page import choose_films, write_report
 from colorsort.benchmark.shift_sweep import format_sweep, run_sweep, sweep_arms, sweep_rows
+from colorsort.benchmark.sweep_journal import SweepJournal, header, journal_path
 from colorsort.cli.config_args import Spelling, parse_config
 from colorsort.cli.run import guarded
 from colorsort.errors import ConfigError
@@ -91,6 +93,7 @@ class SweepConfig:
     shifts: tuple[str, ...] = ()  # the shifts to sweep (default: every shift); --sweep-shifts
     levels: tuple[int, ...] = (1, 2, 3)  # the levels to sweep; --levels
     side_episodes: int | None = None  # episodes at levels other than 2 (default: --episodes); --side-episodes
+    resume: bool = False  # run only the episodes the journal of --json's sweep lacks (<json>.partial.jsonl); --resume
 
     def __post_init__(self) -> None:
         if not self.levels or any(v not in LEVELS[1:] for v in self.levels):
@@ -136,6 +139,8 @@ class EvalCommandConfig:
         if self.sweep.run and (self.shift or self.report.dir or self.variant == "all" or self.backend != "cpu"):
             raise ConfigError("--sweep runs its own arms on one variant, on the CPU cell: leave out --shift, --report,"
                               " --variant all and --backend warp")
+        if self.sweep.resume and not (self.sweep.run and self.json):
+            raise ConfigError("--resume continues a sweep from the journal beside its --json: give --sweep and --json")
 
 
 # flags as they were written before the command was its configuration (docs/evaluation.md): both forms work
@@ -144,7 +149,7 @@ SPELLING = Spelling(renamed={"--envs": "--executor.workers", "--executor": "--ex
                              "--report": "--report.dir", "--videos": "--report.videos",
                              "--overwrite": "--report.overwrite=true", "--sweep": "--sweep.run=true",
                              "--sweep-shifts": "--sweep.shifts", "--levels": "--sweep.levels",
-                             "--side-episodes": "--sweep.side_episodes"})
+                             "--side-episodes": "--sweep.side_episodes", "--resume": "--sweep.resume=true"})
 
 
 def parse_args(argv: list[str]) -> EvalCommandConfig:
@@ -229,9 +234,18 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
     """``--sweep``: the control and every shift at every level on the same seeds; prints the table."""
     arms = sweep_arms(args.episodes, args.sweep.side_episodes or args.episodes, args.sweep.levels,
                       args.sweep.shifts or None)
+    journal = None
+    if args.json:  # each finished episode written as it arrives: an interrupted sweep resumes (--resume)
+        journal = SweepJournal(journal_path(args.json), header(args.policy, args.variant, cameras, image_size,
+                                                               args.episode_length), args.sweep.resume)
+    wanted = {(a.shift, seed) for a in arms for seed in SHIFT_SEEDS[: a.episodes]}
+    reused = len(wanted & journal.done.keys()) if journal else 0
+    if journal and reused:
+        print(f"resuming: {reused} of the {len(wanted)} episodes finished already ({journal.path})")
     start = time.perf_counter()
     reports = run_sweep(args.policy, args.variant, arms, image_size=image_size, cameras=cameras,
-                        episode_length=args.episode_length, executor=executor, shard_size=args.shard_size)
+                        episode_length=args.episode_length, executor=executor, shard_size=args.shard_size,
+                        done=journal.done if journal else None, on_episode=journal.add if journal else None)
     wall = time.perf_counter() - start
     rows = sweep_rows(reports)
     print(format_sweep(args.policy, args.variant, rows))
@@ -241,10 +255,13 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
         payload = {"policy": args.policy, "variant": args.variant, "seeds": list(SHIFT_SEEDS[: args.episodes]),
                    "command": shlex.join(["colorsort-eval", *argv]), "wall_s": round(wall, 1),
                    "executor": executor.name, "envs": executor.workers, "machine": machine(),
+                   "resumed_episodes": reused,  # taken from the journal; wall_s is the others' time
                    "written": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                    "rows": rows, "reports": [asdict(r) for r in reports]}
         Path(args.json).write_text(json.dumps(payload, indent=1))
         print(f"metrics: {args.json}")
+        if journal is not None:
+            journal.finish()
     return 0
 
 

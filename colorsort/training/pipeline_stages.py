@@ -129,9 +129,10 @@ def collect_command(recipe: Recipe, variant: str, k: int, count: int, workers: i
 def part_settings(config: CollectConfig) -> dict:
     """What a part's demos depend on, the key of its cache: what it records (``CollectConfig.settings`` and the
     episodes; not the workers, nor how a flag is spelt: the same seeds give the same data) and the versions of the
-    code that records it (the expert, the cell, the recorder)."""
+    code that records it (the expert, the cell, the recorder; the shifts' where the demos are recorded under their
+    training ranges)."""
     return {"collect": {**config.settings(), "episodes": config.episodes},
-            "code": code_versions("expert", "cell", "recorder")}
+            "code": code_versions("expert", "cell", "recorder", *(("shifts",) if config.shift else ()))}
 
 
 def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
