@@ -148,6 +148,19 @@ def test_an_evaluation_on_ray_gives_the_local_numbers_and_films_each_episode_whe
         assert video[4:8] == b"ftyp" and len(read_video(tmp_path / f"{seed}.mp4")) == 31
 
 
+def test_a_sweeps_episodes_reach_its_journal_from_ray_workers_as_they_finish(cluster):
+    """Each finished episode of a sweep on Ray comes back through the executor's messages (what the journal writes,
+    ``--resume``) and the reports are those of this process."""
+    from colorsort.benchmark.shift_sweep import run_sweep, sweep_arms
+
+    arms, seen = sweep_arms(2, 1, (2,), ("image-noise",)), []
+    kwargs = dict(episode_length=10, progress=False)
+    spread = run_sweep("expert", "default", arms, executor=ExecutorConfig("ray", 2), shard_size=1,
+                       on_episode=lambda shift, result: seen.append((shift, result.seed)), **kwargs)
+    assert sorted(seen) == [("image-noise:2", 30000), ("image-noise:2", 30001), ("none", 30000), ("none", 30001)]
+    assert spread == run_sweep("expert", "default", arms, **kwargs)
+
+
 def test_the_docs_collection_on_ray_works_as_written(cluster, tmp_path, monkeypatch, capsys):
     """docs/scaling.md's colorsort-collect on Ray, its argv to the console script's ``main`` in this process: it runs
     on the module's cluster (as on any cluster ``ray.init`` finds; starting one: the SLURM test's head)."""
