@@ -609,7 +609,7 @@ def test_the_pages_python_block_runs(tmp_path):
     """The block run as a script in this process; the env it made resets again afterwards."""
     (block,) = page_blocks("python")
     script = tmp_path / "block.py"
-    script.write_text(block + "\nfor e in (env,):\n    e.reset()\n    e.close()\n")
+    script.write_text(block + "\nenv.reset()\nenv.close()\n")
     done = python_script(script, [], tmp_path)
     assert done.returncode == 0, (done.stdout + done.stderr)[-3000:]
 

@@ -112,8 +112,8 @@ def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[i
 
     results = run_jobs([(job.key, run_sweep_job, job) for job in jobs], len(episodes), executor, progress,
                        desc=f"{policy} on {variant}: {len(arms)} arms", on_message=finished) if jobs else []
-    ran = {(arms[k].shift, r.seed): r for job_results in results for k, r in job_results}
-    return [aggregate(policy, variant, [done.get((a.shift, s)) or ran[(a.shift, s)] for s in SHIFT_SEEDS[: a.episodes]],
+    found = {**done, **{(arms[k].shift, r.seed): r for job_results in results for k, r in job_results}}
+    return [aggregate(policy, variant, [found[(a.shift, s)] for s in SHIFT_SEEDS[: a.episodes]],
                       shift_label(parse_shifts(() if a.shift == CONTROL else (a.shift,))))
             for a in arms]
 
