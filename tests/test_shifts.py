@@ -378,6 +378,18 @@ def test_the_pages_shift_tables_are_those_the_summaries_and_the_registry_give():
     assert done.returncode == 0, done.stdout + done.stderr
 
 
+def test_a_resumed_sweeps_summary_says_its_time_is_the_rest_of_its_episodes():
+    from colorsort.benchmark.shift_tables import provenance, summary
+
+    sweep = {"policy": "baselines/act-state", "variant": "default", "command": "colorsort-eval --sweep --resume",
+             "wall_s": 600.0, "resumed_episodes": 273, "machine": "m", "written": "w", "rows": []}
+    kept = summary(sweep)
+    assert kept["resumed_episodes"] == 273
+    assert provenance([kept]) == ("- `act-state`: `colorsort-eval --sweep --resume`, 10 min (after 273 episodes of "
+                                  "an earlier run, resumed from its journal) on m (w)")
+    assert "resumed" not in provenance([{**kept, "resumed_episodes": 0}])
+
+
 def test_a_randomised_recipes_seeds_are_held_to_their_targets_against_the_recipe_without():
     """The `-dr` table: every seed's row, the seeds' mean relative success, their episodes pooled against the recipe
     without randomisation, and each target met or missed, by how much (synthetic sweeps of 20 episodes an arm)."""

@@ -18,7 +18,8 @@ from colorsort.benchmark.metrics import EvalReport, wilson_interval
 from colorsort.benchmark.shift_sweep import sweep_rows
 from colorsort.shifts import GROUPS, SHIFTS
 
-SUMMARY_KEYS = ("policy", "variant", "seeds", "command", "wall_s", "executor", "envs", "machine", "written", "rows")
+SUMMARY_KEYS = ("policy", "variant", "seeds", "command", "wall_s", "resumed_episodes", "executor", "envs", "machine",
+                "written", "rows")
 HEATMAP_LEVEL = 2
 RANDOMISED = "-dr"  # a policy trained with the shifts' training ranges; its name less this is the same recipe without
 SEED_SUFFIX = re.compile(r"-seed\d+$")  # a training seed's sweep beside the shipped policy's (act-...-dr-seed1000)
@@ -91,9 +92,14 @@ def full_table(sweeps: list[dict]) -> str:
 
 
 def provenance(sweeps: list[dict]) -> str:
-    """How each sweep was made: its command, wall time and machine."""
-    return "\n".join(f"- `{policy_name(s)}`: `{s.get('command', '?')}`, {s.get('wall_s', 0) / 60:.0f} min on "
-                     f"{s.get('machine', '?')} ({s.get('written', '?')})" for s in sweeps)
+    """How each sweep was made: its command, wall time and machine; a resumed sweep's time is that of the episodes
+    its last run added to those of its journal."""
+    def resumed(s: dict) -> str:
+        n = s.get("resumed_episodes", 0)
+        return f" (after {n} episodes of an earlier run, resumed from its journal)" if n else ""
+
+    return "\n".join(f"- `{policy_name(s)}`: `{s.get('command', '?')}`, {s.get('wall_s', 0) / 60:.0f} min{resumed(s)} "
+                     f"on {s.get('machine', '?')} ({s.get('written', '?')})" for s in sweeps)
 
 
 def heatmap(sweeps: list[dict], path: Path, level: int = HEATMAP_LEVEL) -> None:
