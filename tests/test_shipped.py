@@ -4,6 +4,7 @@ their scores."""
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from baseline_common import SHIPPED, score_row, scores
 from helpers import console_script
@@ -270,3 +271,51 @@ def test_loading_a_checkpoint_prints_nothing_into_a_benchmarks_recorded_figures(
     capsys.readouterr()
     LeRobotPolicy(SHIPPED["act-state"])
     assert capsys.readouterr().out == ""
+
+
+def test_a_loaded_policy_skips_mode_switches_that_change_nothing_and_acts_as_before():
+    """``skip_unchanged_mode_switches``: ``eval()`` in eval mode walks no submodule; ``train()`` and back still set
+    every one; the shipped state policy's actions over 30 steps are those of the policy as LeRobot loads it."""
+    import torch
+
+    from colorsort.benchmark.policies import LeRobotPolicy
+    from colorsort.envs.gym_env import ColorSortGymEnv
+
+    guarded, plain = LeRobotPolicy(SHIPPED["act-state"]), LeRobotPolicy(SHIPPED["act-state"])
+    del plain.policy.train  # LeRobot's own: every eval() walks every submodule
+    walked = []
+    original = torch.nn.Module.__setattr__
+
+    def counting(self, name, value):
+        if name == "training":
+            walked.append(self)
+        original(self, name, value)
+
+    torch.nn.Module.__setattr__ = counting
+    try:
+        guarded.policy.eval()
+        assert walked == []
+        plain.policy.eval()
+        assert len(walked) > 10  # what each of ACT's select_action calls costs without it
+    finally:
+        torch.nn.Module.__setattr__ = original
+    modes = lambda: {m.training for m in guarded.policy.modules()}  # noqa: E731
+    guarded.policy.train()
+    assert modes() == {True}
+    guarded.policy.eval()
+    assert modes() == {False}
+
+    env = ColorSortGymEnv("default", cameras=(), render_mode=None)
+    try:
+        runs = []
+        for policy in (guarded, plain):
+            obs, _ = env.reset(seed=10000)
+            policy.reset(env, 10000)
+            actions = []
+            for _ in range(30):
+                actions.append(policy.act(obs))
+                obs, *_ = env.step(actions[-1])
+            runs.append(np.array(actions))
+    finally:
+        env.close()
+    assert np.array_equal(runs[0], runs[1])
