@@ -390,6 +390,18 @@ def test_a_resumed_sweeps_summary_says_its_time_is_the_rest_of_its_episodes():
     assert "resumed" not in provenance([{**kept, "resumed_episodes": 0}])
 
 
+def test_every_sweep_has_a_page_of_every_arm_that_the_index_links():
+    from colorsort.benchmark.shift_tables import load, sweep_name
+
+    summaries = ROOT / "docs" / "results" / "shifts"
+    index = (ROOT / "docs" / "shift_results.md").read_text()
+    for sweep in load(summaries):
+        page = (summaries / f"{sweep_name(sweep)}.md").read_text()
+        assert f"(results/shifts/{sweep_name(sweep)}.md)" in index
+        arms = [line for line in page.splitlines() if line.startswith("| `")]
+        assert len(arms) == len(sweep["rows"]) and sweep["command"] in page
+
+
 def test_a_randomised_recipes_seeds_are_held_to_their_targets_against_the_recipe_without():
     """The `-dr` table: every seed's row, the seeds' mean relative success, their episodes pooled against the recipe
     without randomisation, and each target met or missed, by how much (synthetic sweeps of 20 episodes an arm)."""
@@ -551,7 +563,9 @@ def test_an_interrupted_sweep_resumes_from_its_journal_and_gives_the_episodes_of
     calls.clear()
     monkeypatch.setattr(EpisodeRunner, "episode", failing_fourth)  # counts the episodes run (fails a fourth)
     assert exit_status(eval_main, argv(out, "--resume")) == 0
-    assert len(calls) == 2 and "resuming: 2 of the 4 episodes" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert len(calls) == 2 and "resuming: 2 of the 4 episodes" in printed
+    assert re.search(r"^2 episodes in [\d.]+ min \(and 2 from the journal\) \(local, 1 envs\)$", printed, flags=re.M)
     done, reference = json.loads(out.read_text()), json.loads(whole.read_text())
     assert done["rows"] == reference["rows"] and done["resumed_episodes"] == 2
     assert [r["per_episode"] for r in done["reports"]] == [r["per_episode"] for r in reference["reports"]]

@@ -1,5 +1,5 @@
-"""Rewrite the held-out shift tables (README.md, docs/shifts.md, docs/shift_results.md) and heatmap from the
-sweeps in docs/results/shifts/.
+"""Rewrite the held-out shift tables (README.md, docs/shifts.md, docs/shift_results.md, and each sweep's page of
+every arm, docs/results/shifts/<policy>-<variant>.md) and heatmap from the sweeps in docs/results/shifts/.
 
     python tools/shift_tables.py [--add outputs/sweeps/SWEEP.json ...] [--check] [--out DIR]
 
@@ -15,7 +15,7 @@ import json
 import sys
 from pathlib import Path
 
-from colorsort.benchmark.shift_tables import fill, full_table, headline, heatmap, load, policy_name, summary
+from colorsort.benchmark.shift_tables import fill, full_table, headline, heatmap, load, summary, sweep_name, sweep_page
 
 ROOT = Path(__file__).resolve().parent.parent
 SUMMARIES = ROOT / "docs" / "results" / "shifts"
@@ -34,7 +34,7 @@ def main() -> int:
     for path in args.add:
         sweep = summary(json.loads(Path(path).read_text()))  # its rows recomputed from its reports
         source.mkdir(parents=True, exist_ok=True)
-        (source / f"{policy_name(sweep)}-{sweep['variant']}.json").write_text(json.dumps(sweep, indent=1) + "\n")
+        (source / f"{sweep_name(sweep)}.json").write_text(json.dumps(sweep, indent=1) + "\n")
     sweeps = load(source)
     if not sweeps:
         print(f"no sweep summaries in {source}", file=sys.stderr)
@@ -47,11 +47,12 @@ def main() -> int:
         print(f"wrote {out / 'shifts.md'}, {out / 'shift_heatmap.png'}")
         return 0
     stale = []
-    for page in PAGES:
-        text = page.read_text()
-        new = fill(text, sweeps)
+    pages = {page: fill(page.read_text(), sweeps) for page in PAGES}
+    pages |= {source / f"{sweep_name(s)}.md": sweep_page(s) for s in sweeps}  # every arm of each sweep
+    for page, new in pages.items():
+        text = page.read_text() if page.exists() else ""
         if new != text:
-            stale.append(page.relative_to(ROOT))
+            stale.append(page.relative_to(ROOT) if page.is_relative_to(ROOT) else page)
             if not args.check:
                 page.write_text(new)
     if not args.check:

@@ -2,8 +2,9 @@
 
 A sweep's summary (``summary``) keeps what the tables need: policy, variant, seeds, the command that ran it, its
 wall time and machine, and one row per arm (``shift_sweep.sweep_rows``). Pages mark the generated parts with
-``<!-- shifts list -->``, ``<!-- shifts headline -->``, ``<!-- shifts table -->`` and ``<!-- shifts randomised -->``
-(a randomised recipe's seeds against its targets), each closed by ``<!-- end shifts -->``.
+``<!-- shifts list -->``, ``<!-- shifts headline -->``, ``<!-- shifts table -->`` (one line a sweep, linking its page
+of every arm: ``sweep_page``, docs/results/shifts/<policy>-<variant>.md) and ``<!-- shifts randomised -->`` (a
+randomised recipe's seeds against its targets), each closed by ``<!-- end shifts -->``.
 """
 
 from __future__ import annotations
@@ -100,6 +101,36 @@ def provenance(sweeps: list[dict]) -> str:
 
     return "\n".join(f"- `{policy_name(s)}`: `{s.get('command', '?')}`, {s.get('wall_s', 0) / 60:.0f} min{resumed(s)} "
                      f"on {s.get('machine', '?')} ({s.get('written', '?')})" for s in sweeps)
+
+
+def sweep_name(sweep: dict) -> str:
+    """A sweep's file stem in docs/results/shifts/: ``<policy>-<variant>``."""
+    return f"{policy_name(sweep)}-{sweep['variant']}"
+
+
+def sweep_page(sweep: dict) -> str:
+    """docs/results/shifts/<name>.md: every arm of one sweep and how it was made."""
+    name = sweep_name(sweep)
+    return (f"# Held-out shifts: `{policy_name(sweep)}` on `{sweep['variant']}`\n\n"
+            f"Written by `python tools/shift_tables.py` from [{name}.json]({name}.json); every sweep: "
+            f"[shift_results.md](../../shift_results.md); the shifts, their levels and the protocol: "
+            f"[shifts.md](../../shifts.md).\n\n{full_table([sweep])}\n\nMade by:\n\n{provenance([sweep])}\n")
+
+
+def sweep_index(sweeps: list[dict]) -> str:
+    """One line per sweep: its levels, its episodes an arm, its control and a link to its page."""
+    lines = ["| policy | variant | levels | episodes an arm | control | every arm |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for s in sweeps:
+        control = next(r for r in s["rows"] if r["shift"] == "none")
+        levels = sorted({r["level"] for r in s["rows"] if r["shift"] != "none"})
+        side = sorted({r["episodes"] for r in s["rows"] if r["level"] not in (0, HEATMAP_LEVEL)})
+        episodes = f"{control['episodes']} (control, level {HEATMAP_LEVEL})" + (
+            f", {'/'.join(map(str, side))} (levels {', '.join(str(v) for v in levels if v != HEATMAP_LEVEL)})"
+            if side else "")
+        lines.append(f"| `{policy_name(s)}` | `{s['variant']}` | {', '.join(map(str, levels))} | {episodes} | "
+                     f"{100 * control['success']:.0f}% | [{sweep_name(s)}](results/shifts/{sweep_name(s)}.md) |")
+    return "\n".join(lines)
 
 
 def heatmap(sweeps: list[dict], path: Path, level: int = HEATMAP_LEVEL) -> None:
@@ -246,7 +277,7 @@ def fill(text: str, sweeps: list[dict]) -> str:
     """``text`` with its marked regions (the shift list, the headline, the table) rewritten."""
     parts = {"list": shift_list(), "shades": shade_table(), "headline": headline(sweeps),
              "randomised": randomised_table(sweeps),
-             "table": full_table(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
+             "table": sweep_index(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
     for mark, body in parts.items():
         pattern = re.compile(rf"(<!-- shifts {mark} -->\n).*?(<!-- end shifts -->)", flags=re.S)
         found = pattern.search(text)

@@ -249,7 +249,8 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
     wall = time.perf_counter() - start
     rows = sweep_rows(reports)
     print(format_sweep(args.policy, args.variant, rows))
-    print(f"{sum(a.episodes for a in arms)} episodes in {wall / 60:.1f} min ({executor.name}, {executor.workers} envs)")
+    resumed = f" (and {reused} from the journal)" if reused else ""
+    print(f"{len(wanted) - reused} episodes in {wall / 60:.1f} min{resumed} ({executor.name}, {executor.workers} envs)")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         payload = {"policy": args.policy, "variant": args.variant, "seeds": list(SHIFT_SEEDS[: args.episodes]),
