@@ -273,7 +273,7 @@ def test_loading_a_checkpoint_prints_nothing_into_a_benchmarks_recorded_figures(
     assert capsys.readouterr().out == ""
 
 
-def test_a_loaded_policy_skips_mode_switches_that_change_nothing_and_acts_as_before():
+def test_a_loaded_policy_skips_mode_switches_that_change_nothing_and_acts_as_before(monkeypatch):
     """``skip_unchanged_mode_switches``: ``eval()`` in eval mode walks no submodule; ``train()`` and back still set
     every one; the shipped state policy's actions over 30 steps are those of the policy as LeRobot loads it."""
     import torch
@@ -284,26 +284,23 @@ def test_a_loaded_policy_skips_mode_switches_that_change_nothing_and_acts_as_bef
     guarded, plain = LeRobotPolicy(SHIPPED["act-state"]), LeRobotPolicy(SHIPPED["act-state"])
     del plain.policy.train  # LeRobot's own: every eval() walks every submodule
     walked = []
-    original = torch.nn.Module.__setattr__
+    setattr_ = torch.nn.Module.__setattr__
 
     def counting(self, name, value):
         if name == "training":
             walked.append(self)
-        original(self, name, value)
+        setattr_(self, name, value)
 
-    torch.nn.Module.__setattr__ = counting
-    try:
+    with monkeypatch.context() as m:
+        m.setattr(torch.nn.Module, "__setattr__", counting)
         guarded.policy.eval()
         assert walked == []
         plain.policy.eval()
         assert len(walked) > 10  # what each of ACT's select_action calls costs without it
-    finally:
-        torch.nn.Module.__setattr__ = original
-    modes = lambda: {m.training for m in guarded.policy.modules()}  # noqa: E731
     guarded.policy.train()
-    assert modes() == {True}
+    assert {m.training for m in guarded.policy.modules()} == {True}
     guarded.policy.eval()
-    assert modes() == {False}
+    assert {m.training for m in guarded.policy.modules()} == {False}
 
     env = ColorSortGymEnv("default", cameras=(), render_mode=None)
     try:

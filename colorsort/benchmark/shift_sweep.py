@@ -43,6 +43,11 @@ class Arm:
     def level(self) -> int:
         return int(self.shift.partition(":")[2] or 0)
 
+    @property
+    def keys(self) -> list[Key]:
+        """Its episodes as a journal keys them: (its shift, seed) on the first ``episodes`` shift seeds."""
+        return [(self.shift, seed) for seed in SHIFT_SEEDS[: self.episodes]]
+
 
 def sweep_arms(episodes: int, side_episodes: int, levels: tuple[int, ...] = (1, 2, 3),
                names: tuple[str, ...] | None = None) -> list[Arm]:
@@ -103,7 +108,7 @@ def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[i
     path = policy if policy in ("expert", "random") else str(Path(policy).resolve())
     settings = EvalConfig(path, variant, image_size, tuple(cameras), episode_length)
     episodes = [(k, () if arm.shift == CONTROL else (arm.shift,), seed)
-                for k, arm in enumerate(arms) for seed in SHIFT_SEEDS[: arm.episodes] if (arm.shift, seed) not in done]
+                for k, arm in enumerate(arms) for shift, seed in arm.keys if (shift, seed) not in done]
     jobs = [SweepJob(settings, tuple(block)) for block in chunks(episodes, shard_size, executor.workers)]
 
     def finished(message: tuple[int, EpisodeResult]) -> None:
@@ -113,7 +118,7 @@ def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[i
     results = run_jobs([(job.key, run_sweep_job, job) for job in jobs], len(episodes), executor, progress,
                        desc=f"{policy} on {variant}: {len(arms)} arms", on_message=finished) if jobs else []
     found = {**done, **{(arms[k].shift, r.seed): r for job_results in results for k, r in job_results}}
-    return [aggregate(policy, variant, [found[(a.shift, s)] for s in SHIFT_SEEDS[: a.episodes]],
+    return [aggregate(policy, variant, [found[key] for key in a.keys],
                       shift_label(parse_shifts(() if a.shift == CONTROL else (a.shift,))))
             for a in arms]
 

@@ -238,7 +238,7 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
     if args.json:  # each finished episode written as it arrives: an interrupted sweep resumes (--resume)
         journal = SweepJournal(journal_path(args.json), header(args.policy, args.variant, cameras, image_size,
                                                                args.episode_length), args.sweep.resume)
-    wanted = {(a.shift, seed) for a in arms for seed in SHIFT_SEEDS[: a.episodes]}
+    wanted = {key for a in arms for key in a.keys}
     reused = len(wanted & journal.done.keys()) if journal else 0
     if journal and reused:
         print(f"resuming: {reused} of the {len(wanted)} episodes finished already ({journal.path})")
