@@ -121,6 +121,16 @@ class CameraRenderer:
         return image if self.effect is None else self.effect(camera, image)
 
 
+def free_context(sim) -> None:
+    """Free ``sim``'s offscreen GL context now: it and the sim refer to each other, so without this only a full
+    garbage collection would free it."""
+    context = sim._render_context_offscreen
+    if context is not None:
+        context.sim = None
+        sim._render_context_offscreen = None
+        del context  # the last reference: its __del__ frees MuJoCo's and the GL context
+
+
 def camera_sensors(render: Callable, mjcf: str, width: int, height: int, depth: bool, modality: str = "image"):
     """robosuite sensors for camera ``mjcf``, named by its ColorSort alias (``<alias>_image``, and
     ``<alias>_depth`` with ``depth``); ``render(alias, width, height, depth=...)`` draws the images."""

@@ -1,9 +1,9 @@
 """The ColorSort task: a robot sorts coloured boxes off a conveyor into the bins of their colour.
 
-Its specification (action, observations, ``info``, reward, success, bad actions, events,
-determinism, configuration) is written once, in ``docs/task.md``. ``get_sim_state()`` returns
-everything that makes an instant replayable as one float64 vector (layout: ``sim_state.py``);
-``set_sim_state`` restores it, after which stepping the same actions retraces the episode bit for bit.
+Its specification (action, observations, ``info``, reward, success, bad actions, events, determinism,
+configuration) is written once, in ``docs/task.md``. ``get_sim_state()`` returns everything that makes an instant
+replayable as one float64 vector (layout: ``sim_state.py``); ``set_sim_state`` restores it, after which stepping
+the same actions retraces the episode bit for bit.
 
 This class is robosuite glue: the model, the observables, the step, the reward, and what the cell does not own
 (the clock, the seeded generator, robosuite's controllers, held-out shifts); the cell itself is ``plant.py``.
@@ -49,8 +49,8 @@ class ColorSort(ManipulationEnv):
         camera_names: any of "scene", "sensor", "wrist", "snapshot" (the sensor's photo taken when the
             ray last fired, held: ``snapshot.py``); by default the first three.
         control_freq: policy rate [Hz].
-        servo_freq: rate [Hz] at which the arm controller recomputes joint torques, held in
-            between (a drive's servo period); a divisor of the 500 Hz physics rate.
+        servo_freq: rate [Hz] at which the arm controller recomputes joint torques, held in between (a drive's
+            servo period); a divisor of the 500 Hz physics rate.
         use_object_obs: add the ``next_box`` observation (``Plant.next_box_state``), part of robosuite's
             ``object-state`` (what ``GymWrapper`` feeds a policy by default).
         reward_scale: multiplies every reward (None: unscaled), as in robosuite's tasks.
@@ -210,14 +210,12 @@ class ColorSort(ManipulationEnv):
 
     @property
     def placements(self) -> list[Placement]:
-        """Every box set down on the belt this episode, in order: serial, colour, offset, yaw
-        (``conveyor.Placement``)."""
+        """Every box set down on the belt this episode, in order: serial, colour, offset, yaw (``Placement``)."""
         return self.plant.spawner.placed
 
     @property
     def grips(self) -> list[Grip]:
-        """Every seal of this episode, in order: which box, how far off the cup's axis, how turned
-        (``plant.Grip``)."""
+        """Every seal this episode, in order: which box, how far off the cup's axis, how turned (``Grip``)."""
         return self.plant.grips
 
     @property
@@ -267,24 +265,15 @@ class ColorSort(ManipulationEnv):
         return observables
 
     def _destroy_sim(self) -> None:
-        """robosuite's, less its full ``gc.collect()``: that took 0.2-0.5 s of every ``close()`` in a process
-        holding torch and LeRobot (a policy's evaluation, a test worker). The offscreen GL context, which the
-        collection was there to free (it and the sim refer to each other), is freed here directly."""
-        if self.sim is None:
-            return
-        context = self.sim._render_context_offscreen
-        if context is not None:
-            context.sim = None
-            self.sim._render_context_offscreen = None
-            del context  # the last reference: its __del__ frees MuJoCo's and the GL context now
-        self.sim = None
+        """robosuite's, less its full ``gc.collect()`` (0.2-0.5 s a close with torch loaded): ``free_context``."""
+        if self.sim is not None:
+            cameras.free_context(self.sim)
+            self.sim = None
 
     def reset(self, seed: int | None = None, lighting: Callable[[np.random.Generator], Lighting] | None = None):
-        """Reset the episode; ``seed`` reseeds the env's generator first; ``lighting`` then draws this
-        episode's lights from it (``Variant.lighting``), and the cameras see them."""
+        """Reset; ``seed`` reseeds the env's generator first, ``lighting`` then draws the episode's lights from it."""
         if seed is not None:
-            self.seed = seed
-            self.rng = np.random.default_rng(seed)
+            self.seed, self.rng = seed, np.random.default_rng(seed)
         obs = super().reset()
         if lighting is not None:
             before = self.plant.lighting
