@@ -124,7 +124,7 @@ def test_camera_images_right_side_up(make_env):
 
 def test_close_frees_the_gl_context_at_once_without_a_full_collection(monkeypatch):
     """``close()`` frees the offscreen context (it and the sim refer to each other) at once, without robosuite's
-    ``gc.collect()``, which took 0.2-0.5 s of every close in a process holding torch and LeRobot."""
+    ``gc.collect()``, which took 0.23 s of every close in a process holding torch and LeRobot."""
     import gc
     import weakref
 
