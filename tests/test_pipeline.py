@@ -736,9 +736,11 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     (sitting,) = after.added
     assert sitting.seeds == (1001,) and sitting.command.endswith(f"--add-to {shipped}") and sitting.commit
     assert (shipped / "model.safetensors").read_text() == "weights after 2"  # seed 1000's chosen checkpoint
+    assert (shipped / "seed1001" / "model.safetensors").read_text() == "weights after 3"  # seed 1001's, kept
     assert (shipped / "learning_curve.png").read_bytes() == curve_png
     readme = (shipped / "README.md").read_text()
     assert f"Training seed 1001 added later by `{sitting.command}`" in readme
+    assert "The policies of training seeds 1001 (each its checkpoint scored below) are in `seed1001/`" in readme
     assert "each of the recipe's 2 training seeds (1000, 1001; this policy is seed 1000's)" in readme
     assert "| tracking | ACT, state | 4 | 3 steps (0.5 passes), scored at 2/3 after 2/6 min" in readme
     assert "| 1001 | 3 (chosen) |" in readme
@@ -746,6 +748,44 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     page = f"<!-- scores {shipped.name} table -->\n<!-- end scores -->"
     assert f"; seed 1001 added by {sitting.command}):" in tables.fill(page, tmp_path)
     assert colorsort_baseline.main(later + ["--add-to", str(shipped)]) == 2  # seed 1001 is there now
+    assert "already holds training seeds [1001] with their policies" in capsys.readouterr().err
+
+
+def test_a_held_seed_run_again_keeps_its_policy_only_when_it_reproduces_every_scored_episode(tmp_path, monkeypatch,
+                                                                                          capsys):
+    """A seed a baseline holds without its policy (added before baselines kept them) may be run again with
+    ``--add-to``: a run that reproduces every episode and validation point the seed scored keeps its policy in
+    ``seed<N>/`` and its sitting, the rows as they were; one that scores otherwise changes nothing, exit 2."""
+    from colorsort.training.results_file import PipelineResults
+
+    flags = ["--recipe", "state-tracking", "--demos.counts=4", "--training.steps=3", "--training.save_every=1",
+             "--evaluation.select_episodes=2", "--evaluation.variants=tracking", "--evaluation.episodes=4",
+             "--evaluation.curve_episodes=4"]
+    shipped = tmp_path / "shipped"
+    fake_stages(monkeypatch, lambda seed, step, validating: step - 1, lambda seed: 60)
+    assert baseline_main(flags + ["--training.seeds=1000", "--out", str(tmp_path / "one"), "--ship",
+                                  str(shipped)], capsys)[0] == 0
+    later = flags + ["--training.seeds=1001", "--add-to", str(shipped)]
+    assert baseline_main(later + ["--out", str(tmp_path / "two")], capsys)[0] == 0
+    shutil.rmtree(shipped / "seed1001")  # as a baseline of before: seed 1001's rows, not its weights
+    before = (shipped / "scores.json").read_text()
+
+    fake_stages(monkeypatch, lambda seed, step, validating: step - 1 - (seed == 1001 and not validating), lambda s: 60)
+    capsys.readouterr()
+    assert colorsort_baseline.main(later + ["--out", str(tmp_path / "three")]) == 2
+    assert "training seed 1001 scored otherwise on ['tracking']" in capsys.readouterr().err
+    assert (shipped / "scores.json").read_text() == before and not (shipped / "seed1001").exists()
+
+    fake_stages(monkeypatch, lambda seed, step, validating: step - 1, lambda seed: 90)  # slower: minutes differ
+    status, printed = baseline_main(later + ["--out", str(tmp_path / "four")], capsys)
+    assert status == 0 and "training seeds [1001] reproduced every episode" in printed
+    assert (shipped / "seed1001" / "model.safetensors").read_text() == "weights after 3"
+    after, held = PipelineResults.load(shipped / "scores.json"), PipelineResults.from_json(json.loads(before))
+    assert after.rows == held.rows and after.added == held.added and after.seeds == (1000, 1001)
+    (sitting,) = after.kept
+    assert sitting.seeds == (1001,) and str(tmp_path / "four") in sitting.command
+    readme = (shipped / "README.md").read_text()
+    assert f"Training seed 1001 run again by `{sitting.command}`" in readme and "`seed1001/`" in readme
 
 
 def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):

@@ -403,8 +403,9 @@ def test_every_sweep_has_a_page_of_every_arm_that_the_index_links():
 
 
 def test_a_randomised_recipes_seeds_are_held_to_their_targets_against_the_recipe_without():
-    """The `-dr` table: every seed's row, the seeds' mean relative success, their episodes pooled against the recipe
-    without randomisation, and each target met or missed, by how much (synthetic sweeps of 20 episodes an arm)."""
+    """The `-dr` table: every seed's row (a seed's policy kept in the baseline's `seed<N>/` is `<baseline>-seed<N>`),
+    the seeds' mean relative success, their episodes pooled against the recipe without randomisation, and each
+    target met or missed, by how much (synthetic sweeps of 20 episodes an arm)."""
     from colorsort.benchmark.metrics import wilson_interval
     from colorsort.benchmark.shift_tables import randomised_table
 
@@ -418,7 +419,7 @@ def test_a_randomised_recipes_seeds_are_held_to_their_targets_against_the_recipe
 
     table = randomised_table([sweep("baselines/x", 20, joint_noise=9, box_size=12),
                               sweep("baselines/x-dr", 20, joint_noise=20, box_size=4),
-                              sweep("outputs/policies/x-dr-seed7", 19, joint_noise=19, box_size=10)])
+                              sweep("baselines/x-dr/seed7", 19, joint_noise=19, box_size=10)])  # kept beside it
     low = randomised_table([sweep("baselines/x-dr", 17, joint_noise=20)])
     assert "`x-dr`: 2 training seeds (`x-dr`, `x-dr-seed7`), level 2, against `x`" in table
     assert "| shift | shipped | seed7 |" in table

@@ -39,8 +39,9 @@ def test_a_shipped_baseline_sorts_through_colorsort_eval(name, tmp_path):
 
 @pytest.mark.parametrize("name", list(SHIPPED))
 def test_a_shipped_baseline_weighs_what_a_shipped_policy_may(name):
-    """Every file of the folder together: a state policy under 20 MB, a camera policy under 50 MB, as its README
-    says; one whose recipe stores float16 weights holds float16 tensors only, and its README says so."""
+    """Every file of each policy in the folder together (the shipped one, and each training seed's kept beside it in
+    ``seed<N>/``): a state policy under 20 MB, a camera policy under 50 MB, as its README says; one whose recipe
+    stores float16 weights holds float16 tensors only, and its README says so."""
     import torch
     from safetensors.torch import load_file
 
@@ -48,13 +49,14 @@ def test_a_shipped_baseline_weighs_what_a_shipped_policy_may(name):
         pytest.skip(f"baselines/{name} is not shipped")
     recipe = json.loads((SHIPPED[name] / "scores.json").read_text())["recipe"]
     cameras = recipe["demos"]["cameras"] if isinstance(recipe.get("demos"), dict) else recipe["cameras"]
-    size = sum(f.stat().st_size for f in SHIPPED[name].iterdir()) / 1e6  # [MB]
-    assert size < (50 if cameras else 20)
     readme = (SHIPPED[name] / "README.md").read_text()
     training = recipe["training"] if isinstance(recipe.get("training"), dict) else {}
     weights = training.get("weights", "float32")
-    dtypes = {t.dtype for t in load_file(SHIPPED[name] / "model.safetensors").values() if t.is_floating_point()}
-    assert dtypes == {getattr(torch, weights)}
+    for policy in [SHIPPED[name], *sorted(SHIPPED[name].glob("seed*/"))]:
+        size = sum(f.stat().st_size for f in policy.iterdir() if f.is_file()) / 1e6  # [MB]
+        assert size < (50 if cameras else 20)
+        dtypes = {t.dtype for t in load_file(policy / "model.safetensors").values() if t.is_floating_point()}
+        assert dtypes == {getattr(torch, weights)}
     assert (f"The weights are stored in {weights}" in readme) == (weights != "float32")
 
 

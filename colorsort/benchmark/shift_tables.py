@@ -50,7 +50,12 @@ def load(folder: Path) -> list[dict]:
 
 
 def policy_name(sweep: dict) -> str:
-    return Path(sweep["policy"]).name if sweep["policy"] not in ("expert", "random") else sweep["policy"]
+    """The row's name: the policy folder's, ``expert`` or ``random``; a training seed's policy kept beside a
+    baseline's (``baselines/act-camera-snapshot-dr/seed1000``) is ``act-camera-snapshot-dr-seed1000``."""
+    if sweep["policy"] in ("expert", "random"):
+        return sweep["policy"]
+    folder = Path(sweep["policy"])
+    return f"{folder.parent.name}-{folder.name}" if re.fullmatch(r"seed\d+", folder.name) else folder.name
 
 
 def at_level(sweep: dict, level: int) -> list[dict]:

@@ -33,13 +33,14 @@ def journal_path(json_path: str | Path) -> Path:
 
 
 def checkpoint_digest(policy: str) -> str:
-    """16 hex digits of the SHA-256 of a checkpoint folder's files (names and bytes); the name of ``expert`` or
-    ``random``, whose code the versions cover."""
+    """16 hex digits of the SHA-256 of a checkpoint folder's files (names and bytes; not its subfolders, where a
+    baseline keeps other training seeds' policies); the name of ``expert`` or ``random``, whose code the versions
+    cover."""
     folder = Path(policy)
     if not folder.is_dir():
         return policy
     sha = hashlib.sha256()
-    for f in sorted(p for p in folder.rglob("*") if p.is_file()):
+    for f in sorted(p for p in folder.iterdir() if p.is_file()):
         sha.update(f.relative_to(folder).as_posix().encode())
         sha.update(f.read_bytes())
     return sha.hexdigest()[:16]

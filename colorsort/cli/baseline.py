@@ -22,7 +22,10 @@ along the way. It prints a Markdown table and writes ``OUT/results.json``, ``OUT
 ``--ship DIR`` copies the largest set's ``pretrained_model`` to DIR with ``scores.json``, the plots and a
 README of how it was made. ``--add-to DIR`` adds the run's training seeds to the baseline shipped in DIR (the
 same recipe and flags but ``--training.seeds``, which names seeds it does not hold): its scores, tables and README
-gain their rows, its policy stays. So a row's seeds can be trained in separate sittings, on other machines.
+gain their rows, its policy stays, and each added seed's policy is kept in ``DIR/seed<N>/``. So a row's seeds can
+be trained in separate sittings, on other machines. A seed DIR holds without its policy (added before DIR kept
+them) may be run again: its policy is kept when the run reproduces every episode the seed scored (exit 2 with the
+variants that differ, nothing changed, otherwise).
 
 Finished stages under OUT are reused, each named by a key of the typed settings that feed it and the versions
 of the code that made its data (``colorsort.training.cache``, ``colorsort.versions``), so an interrupted run
@@ -154,7 +157,7 @@ def main(argv: list[str] | None = None) -> int:
     if ship_to and ship_to.exists() and any(ship_to.iterdir()):
         raise DataExistsError(f"{ship_to} exists: remove it first, ship elsewhere, or add seeds with --add-to")
     if add_to:
-        addable(recipe, add_to)  # ConfigError before any work: another recipe, or seeds it holds
+        addable(recipe, add_to)  # ConfigError before any work: another recipe, or seeds it holds with policies
     if args.fresh:
         shutil.rmtree(settings.out, ignore_errors=True)
     run_pipeline(recipe, settings, shlex.join(["colorsort-baseline", *argv]), ship_to, add_to)  # DataConflictError:

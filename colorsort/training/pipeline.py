@@ -56,14 +56,15 @@ def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Pat
                  add_to: Path | None = None) -> PipelineResults | None:
     """Every stage of ``recipe`` under ``settings.out``; the results (also written to ``out/results.json``), or None
     when ``settings.until`` stops before the evaluations. ``ship_to``: ship the first seed's policy there;
-    ``add_to``: add this run's training seeds to the baseline shipped there (``ship.add_seeds``: its learning curve
-    is its own first seed's, so this run makes none)."""
+    ``add_to``: add this run's training seeds and their policies to the baseline shipped there (``ship.add_seeds``:
+    its learning curve is its own first seed's, so this run makes none)."""
     out = settings.out
     out.mkdir(parents=True, exist_ok=True)
     started, t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), time.perf_counter()
     rows: list[ScoreRow] = []
     curve: list[CurvePoint] = []
     shipped: Path | None = None
+    models: dict[int, Path] = {}  # the largest set's policy of each training seed
     demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
     for n in demos.counts:
         largest = n == demos.counts[-1]
@@ -93,6 +94,8 @@ def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Pat
                                        chosen if validation else None, tuple(validation)))
                 print(table(scored[-1:], recipe.label).splitlines()[-1], flush=True)
             rows += scored
+            if largest:
+                models[seed] = model
             if largest and seed == training.seeds[0]:
                 shipped = model
                 if training.save_every and add_to is None:
@@ -115,7 +118,7 @@ def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Pat
     if ship_to is not None:
         ship(recipe, shipped, results, plots, ship_to, command)
     if add_to is not None:
-        add_seeds(recipe, results, add_to, command)
+        add_seeds(recipe, results, add_to, command, models)
     return results
 
 

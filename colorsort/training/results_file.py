@@ -4,9 +4,10 @@
   colorsort-eval's ``EvalReport``, and where validation seeds chose the checkpoint, the choice and its points.
 - ``ValidationPoint``: one checkpoint on the validation seeds of every training variant.
 - ``CurvePoint``: one checkpoint on the main variant's first evaluation seeds (the learning curve).
-- ``Sitting``: a later run that added training seeds to a shipped baseline (``colorsort-baseline --add-to``).
+- ``Sitting``: a later run that added training seeds to a shipped baseline (``colorsort-baseline --add-to``), or
+  ran seeds it held again to keep their policies.
 - ``PipelineResults``: a run of the pipeline: the recipe (as JSON), the command, when, how long, its rows and curve, and
-  the sittings that added seeds to it.
+  the sittings that added seeds to it or kept their policies.
 
 Each record's ``to_json`` writes the flat objects ``scores.json`` has always held, and ``from_json`` reads them,
 those of baselines shipped before the records included.
@@ -125,13 +126,14 @@ class ScoreRow:
 
 @dataclass(frozen=True)
 class Sitting:
-    """A run of the pipeline on another machine or day that added training seeds to a shipped baseline."""
+    """A run of the pipeline on another machine or day that added training seeds to a shipped baseline, or ran
+    seeds it held again, reproduced every episode they scored and kept their policies (``ship.add_seeds``)."""
 
     command: str
     commit: str  # the checkout's (``ship.commit``)
     started: str  # "2026-12-01 14:26 UTC"
     wall_s: float  # [s] the run's wall time
-    seeds: tuple[int, ...]  # lerobot-train's seeds it added
+    seeds: tuple[int, ...]  # lerobot-train's seeds it added (or whose policies it kept)
 
     def named_seeds(self) -> str:
         """"seed 1000", "seeds 1000, 1002"."""
@@ -148,7 +150,8 @@ class Sitting:
 @dataclass(frozen=True)
 class PipelineResults:
     """One run of the pipeline (``results.json``; shipped as ``scores.json``), with the sittings that added
-    training seeds to it (``added``: their rows are in ``rows``; the curve stays the first seed's)."""
+    training seeds to it (``added``: their rows are in ``rows``; the curve stays the first seed's) and those that
+    ran held seeds again to keep their policies (``kept``: the rows they reproduced were there already)."""
 
     recipe: dict  # Recipe.to_json(), or a shipped baseline's flat recipe of before the sections
     command: str
@@ -158,6 +161,7 @@ class PipelineResults:
     curve: tuple[CurvePoint, ...] = ()
     commit: str = ""  # the checkout's at shipping (``ship.commit``); "" in results.json
     added: tuple[Sitting, ...] = ()
+    kept: tuple[Sitting, ...] = ()
 
     @property
     def seeds(self) -> tuple[int, ...]:
@@ -171,6 +175,8 @@ class PipelineResults:
             out["commit"] = self.commit
         if self.added:
             out["added"] = [s.to_json() for s in self.added]
+        if self.kept:
+            out["kept"] = [s.to_json() for s in self.kept]
         return out
 
     @classmethod
@@ -178,7 +184,8 @@ class PipelineResults:
         return cls(data["recipe"], data["command"], data["started"], data["wall_s"],
                    tuple(ScoreRow.from_json(r) for r in data["rows"]),
                    tuple(CurvePoint.from_json(p) for p in data.get("curve") or ()), data.get("commit", ""),
-                   tuple(Sitting.from_json(s) for s in data.get("added", ())))
+                   tuple(Sitting.from_json(s) for s in data.get("added", ())),
+                   tuple(Sitting.from_json(s) for s in data.get("kept", ())))
 
     @classmethod
     def load(cls, path: Path) -> PipelineResults:

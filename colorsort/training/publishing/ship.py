@@ -2,7 +2,10 @@
 
 ``ship`` makes a baseline's folder; ``add_seeds`` adds the rows of training seeds run later (another sitting,
 another machine: the same recipe but its seeds, so the same demos) to a folder shipped before, leaving its
-policy, the first seed's, as it was."""
+policy, the first seed's, as it was, and keeps each added seed's policy beside it in ``seed<N>/``: a later
+sitting's run folder is on another machine, and a seed's held-out sweep needs its weights. A seed held without its
+policy there (added before the folders kept them) may be run again: its policy is kept when the run reproduces
+every episode the seed scored, and refused otherwise."""
 
 from __future__ import annotations
 
@@ -12,13 +15,14 @@ import os
 import shutil
 import subprocess
 from dataclasses import asdict, replace
+from functools import partial
 from pathlib import Path
 
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, DataConflictError
 from colorsort.training.dagger_config import DaggerConfig
 from colorsort.training.publishing.run_summary import curve_table, plot_demos, summary_table, table, validation_table
 from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
-from colorsort.training.results_file import PipelineResults, Sitting
+from colorsort.training.results_file import PipelineResults, ScoreRow, Sitting
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
 
 
@@ -82,6 +86,16 @@ def dagger_line(recipe: Recipe, frames: int) -> str:
             f"training.")
 
 
+def seed_folder(dest: Path, seed: int) -> Path:
+    """Where a baseline keeps the policy of a training seed other than its own first: ``dest/seed<N>``."""
+    return dest / f"seed{seed}"
+
+
+def policy_bytes(folder: Path) -> int:
+    """The bytes of the policy in ``folder``: its own files, not its seed folders' nor its README."""
+    return sum(f.stat().st_size for f in folder.iterdir() if f.is_file() and f.name != "README.md")
+
+
 def ship(recipe: Recipe, model: Path, results: PipelineResults, plots: list[Path], dest: Path, command: str) -> None:
     """Copy ``model`` to ``dest`` with ``scores.json`` (``results``), the plots and a README of how it was made."""
     dest.mkdir(parents=True, exist_ok=True)
@@ -92,7 +106,7 @@ def ship(recipe: Recipe, model: Path, results: PipelineResults, plots: list[Path
     results = replace(results, command=command, commit=commit(dest))
     (dest / "scores.json").write_text(json.dumps(results.to_json(), indent=1))
     write_readme(recipe, results, dest)
-    print(f"shipped {dest} ({sum(f.stat().st_size for f in dest.iterdir()) / 1e6:.1f} MB)")
+    print(f"shipped {dest} ({policy_bytes(dest) / 1e6:.1f} MB)")
 
 
 def differences(stored: object, recipe: object, prefix: str = "") -> list[str]:
@@ -120,8 +134,9 @@ def with_defaults(recipe: dict) -> dict:
 
 
 def addable(recipe: Recipe, dest: Path) -> PipelineResults:
-    """The scores shipped in ``dest``, when ``recipe`` differs from theirs only in training seeds none of theirs;
-    ConfigError saying what differs otherwise."""
+    """The scores shipped in ``dest``, when ``recipe`` differs from theirs only in training seeds: seeds it does not
+    hold, or holds without their policy (neither its own first seed nor a ``seed<N>`` folder); ConfigError saying
+    what differs otherwise."""
     path = dest / "scores.json"
     if not path.is_file():
         raise ConfigError(f"{dest} holds no shipped baseline (no scores.json): ship one there first with --ship")
@@ -130,28 +145,64 @@ def addable(recipe: Recipe, dest: Path) -> PipelineResults:
     if differ:
         raise ConfigError(f"{dest}'s recipe differs from this run's in {differ}: seeds can be added only to a "
                           "baseline of the same recipe (give those settings as it was made, see its README)")
-    again = sorted(set(recipe.training.seeds) & set(shipped.seeds))
-    if again:
-        raise ConfigError(f"{dest} already holds training seeds {again}: give --training.seeds other than "
-                          f"{list(shipped.seeds)}")
+    held = [s for s in sorted(set(recipe.training.seeds) & set(shipped.seeds))
+            if s == shipped.seeds[0] or seed_folder(dest, s).is_dir()]
+    if held:
+        raise ConfigError(f"{dest} already holds training seeds {held} with their policies: give --training.seeds "
+                          f"other than {list(shipped.seeds)}")
     return shipped
 
 
-def add_seeds(recipe: Recipe, results: PipelineResults, dest: Path, command: str) -> PipelineResults:
+def episodes(row: ScoreRow) -> tuple:
+    """What a run of a row's seed again must reproduce: the checkpoint chosen, each validation point's counts and
+    every scored episode (not the minutes, nor the run's folder)."""
+    points = [(p.step, p.episodes, p.successes, p.correct, p.misplaced, p.dropped, p.success_by_variant)
+              for p in row.validation]
+    return row.demos_tried, row.demos, row.frames, row.steps, row.checkpoint, points, row.report.per_episode
+
+
+def unreproduced(held: PipelineResults, run: PipelineResults, seed: int) -> list[str]:
+    """The variants where ``run``'s rows of ``seed`` differ from the ones ``held`` has (or are missing)."""
+    def rows(results: PipelineResults) -> dict[tuple[int, str], tuple]:
+        return {(r.demos_tried, r.variant): episodes(r) for r in results.rows if r.seed == seed}
+
+    theirs, ours = rows(held), rows(run)
+    return sorted({key[1] for key in theirs.keys() | ours.keys() if theirs.get(key) != ours.get(key)})
+
+
+def add_seeds(recipe: Recipe, results: PipelineResults, dest: Path, command: str,
+              models: dict[int, Path]) -> PipelineResults:
     """Add ``results``' rows (training seeds run in a later sitting of ``recipe``) to the baseline shipped in
-    ``dest``: its scores, its plot against demos and its README; its policy, curve and first command stay. The
-    merged scores."""
+    ``dest``: its scores, its plot against demos and its README, and each seed's policy (``models``, by seed) in
+    ``seed<N>/``; its policy, curve and first command stay. A seed it held already keeps its rows, and its policy is
+    kept only when the run reproduced every one of them (DataConflictError, nothing changed, otherwise). The merged
+    scores."""
     shipped = addable(recipe, dest)
-    seeds = shipped.seeds + recipe.training.seeds
+    again = tuple(s for s in recipe.training.seeds if s in shipped.seeds)
+    new = tuple(s for s in recipe.training.seeds if s not in shipped.seeds)
+    for seed in again:
+        differ = unreproduced(shipped, results, seed)
+        if differ:
+            raise DataConflictError(f"training seed {seed} scored otherwise on {differ} than {dest} holds: this run's "
+                                    "policy is not the one scored there, so nothing was kept or changed")
+    for seed in recipe.training.seeds:
+        shutil.copytree(models[seed], seed_folder(dest, seed))
+    sitting = partial(Sitting, command, commit(dest), results.started, results.wall_s)
+    seeds = shipped.seeds + new
     merged_recipe = recipe.override({"training.seeds": seeds})
-    sitting = Sitting(command, commit(dest), results.started, results.wall_s, recipe.training.seeds)
-    merged = replace(shipped, recipe=merged_recipe.to_json(), rows=shipped.rows + results.rows,
-                     added=shipped.added + (sitting,))
+    merged = replace(shipped, recipe=merged_recipe.to_json(),
+                     rows=shipped.rows + tuple(r for r in results.rows if r.seed in new),
+                     added=shipped.added + ((sitting(new),) if new else ()),
+                     kept=shipped.kept + ((sitting(again),) if again else ()))
     (dest / "scores.json").write_text(json.dumps(merged.to_json(), indent=1))
     main = recipe.evaluation.main_variant
     plot_demos([r for r in merged.rows if r.variant == main], recipe.label, main, dest / "success_vs_demos.png")
     write_readme(merged_recipe, merged, dest)
-    print(f"added training seeds {list(recipe.training.seeds)} to {dest} (now {list(seeds)})")
+    if new:
+        print(f"added training seeds {list(new)} to {dest} (now {list(seeds)})")
+    if again:
+        print(f"training seeds {list(again)} reproduced every episode {dest} holds of them: their policies kept in "
+              f"{', '.join(str(seed_folder(dest, s)) for s in again)}")
     return merged
 
 
@@ -161,7 +212,7 @@ def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
     every_seed = [r for r in results.rows if r.demos_tried == demos.counts[-1]]
     largest = [r for r in every_seed if r.seed == training.seeds[0]]
-    size_mb = sum(f.stat().st_size for f in dest.iterdir() if f.name != "README.md") / 1e6
+    size_mb = policy_bytes(dest) / 1e6
     inputs = (f"`observation.state` and the cameras {', '.join(demos.cameras)} at {demos.image_size} px, never "
               "`observation.environment_state`: the policy sees the boxes" if demos.cameras else
               "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
@@ -192,6 +243,16 @@ def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     dagger = dagger_line(recipe, largest[0].frames)
     added = "".join(f" Training {s.named_seeds()} added later by `{s.command}` on commit {s.commit}, started "
                     f"{s.started} ({s.wall_s / 60:.0f} min)." for s in results.added)
+    added += "".join(f" Training {s.named_seeds()} run again by `{s.command}` on commit {s.commit}, started "
+                     f"{s.started} ({s.wall_s / 60:.0f} min): it reproduced every episode scored below, and its "
+                     "policy was kept." for s in results.kept)
+    kept = [s for s in training.seeds[1:] if seed_folder(dest, s).is_dir()]
+    beside = ""
+    if kept:
+        folders = ", ".join(f"`{seed_folder(dest, s).name}/`" for s in kept)
+        beside = (f"\nThe policies of training seeds {', '.join(map(str, kept))} (each its checkpoint scored below) "
+                  f"are in {folders}: `colorsort-eval --policy {seed_folder(dest, kept[0])} --variant "
+                  f"{evaluation.main_variant}`.\n")
     task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
     sha = results.commit or "unknown"
     stored = ("" if training.weights == "float32" else
@@ -224,4 +285,4 @@ HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task={task} --env.camer
 Scores (`colorsort-eval`, each variant's fixed evaluation seeds; `scores.json` holds them with every episode):
 
 {table(largest, recipe.label)}
-{seeds}{chosen}{curve}""")
+{seeds}{beside}{chosen}{curve}""")
