@@ -751,11 +751,13 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     assert "already holds training seeds [1001] with their policies" in capsys.readouterr().err
 
 
-def test_a_held_seed_run_again_keeps_its_policy_only_when_it_reproduces_every_scored_episode(tmp_path, monkeypatch,
-                                                                                          capsys):
+def test_a_held_seed_run_again_is_kept_when_it_reproduces_its_rows_and_replaces_them_only_when_asked(tmp_path,
+                                                                                                   monkeypatch,
+                                                                                                   capsys):
     """A seed a baseline holds without its policy (added before baselines kept them) may be run again with
     ``--add-to``: a run that reproduces every episode and validation point the seed scored keeps its policy in
-    ``seed<N>/`` and its sitting, the rows as they were; one that scores otherwise changes nothing, exit 2."""
+    ``seed<N>/`` and its sitting, the rows as they were; one that scores otherwise changes nothing, exit 2, unless
+    ``--replace-seeds`` says to replace the seed's rows with its own."""
     from colorsort.training.results_file import PipelineResults
 
     flags = ["--recipe", "state-tracking", "--demos.counts=4", "--training.steps=3", "--training.save_every=1",
@@ -773,7 +775,9 @@ def test_a_held_seed_run_again_keeps_its_policy_only_when_it_reproduces_every_sc
     fake_stages(monkeypatch, lambda seed, step, validating: step - 1 - (seed == 1001 and not validating), lambda s: 60)
     capsys.readouterr()
     assert colorsort_baseline.main(later + ["--out", str(tmp_path / "three")]) == 2
-    assert "training seed 1001 scored otherwise on ['tracking']" in capsys.readouterr().err
+    said = capsys.readouterr().err
+    assert "training seeds [1001] scored otherwise than" in said and "{1001: ['tracking']}" in said
+    assert "--replace-seeds" in said
     assert (shipped / "scores.json").read_text() == before and not (shipped / "seed1001").exists()
 
     fake_stages(monkeypatch, lambda seed, step, validating: step - 1, lambda seed: 90)  # slower: minutes differ
@@ -786,6 +790,25 @@ def test_a_held_seed_run_again_keeps_its_policy_only_when_it_reproduces_every_sc
     assert sitting.seeds == (1001,) and str(tmp_path / "four") in sitting.command
     readme = (shipped / "README.md").read_text()
     assert f"Training seed 1001 run again by `{sitting.command}`" in readme and "`seed1001/`" in readme
+
+    # scored otherwise, with --replace-seeds: the seed's rows are the new run's, the sitting that made the old ones
+    # is recorded as replaced, the others stay
+    shutil.rmtree(shipped / "seed1001")
+    assert colorsort_baseline.main(flags + ["--training.seeds=1001", "--replace-seeds=true"]) == 2  # no --add-to
+    fake_stages(monkeypatch, lambda seed, step, validating: step - 1 - (seed == 1001 and not validating), lambda s: 60)
+    status, printed = baseline_main(later + ["--out", str(tmp_path / "five"), "--replace-seeds=true"], capsys)
+    assert status == 0 and "the rows of [1001] replaced" in printed
+    replaced = PipelineResults.load(shipped / "scores.json")
+    assert [r for r in replaced.rows if r.seed == 1000] == [r for r in held.rows if r.seed == 1000]
+    (row,) = [r for r in replaced.rows if r.seed == 1001]
+    assert row.report.successes == 1 and replaced.seeds == (1000, 1001)  # 2 of 4 before
+    assert [s.seeds for s in replaced.replaced] == [(1001,)] and replaced.replaced[0] == held.added[0]
+    assert not replaced.kept  # the run that reproduced the old rows no longer describes any
+    (now,) = replaced.added
+    assert str(tmp_path / "five") in now.command and now.seeds == (1001,)
+    assert (shipped / "seed1001" / "model.safetensors").read_text() == "weights after 3"
+    readme = (shipped / "README.md").read_text()
+    assert f"Training seed 1001 first added by `{held.added[0].command}`" in readme
 
 
 def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_changed(tmp_path, monkeypatch):

@@ -24,8 +24,9 @@ README of how it was made. ``--add-to DIR`` adds the run's training seeds to the
 same recipe and flags but ``--training.seeds``, which names seeds it does not hold): its scores, tables and README
 gain their rows, its policy stays, and each added seed's policy is kept in ``DIR/seed<N>/``. So a row's seeds can
 be trained in separate sittings, on other machines. A seed DIR holds without its policy (added before DIR kept
-them) may be run again: its policy is kept when the run reproduces every episode the seed scored (exit 2 with the
-variants that differ, nothing changed, otherwise).
+them) may be run again: its policy is kept when the run reproduces every episode the seed scored; one that scores
+otherwise exits 2 with the variants that differ, nothing changed, or with ``--replace-seeds`` replaces that seed's
+rows with its own (the earlier sitting is recorded as replaced).
 
 Finished stages under OUT are reused, each named by a key of the typed settings that feed it and the versions
 of the code that made its data (``colorsort.training.cache``, ``colorsort.versions``), so an interrupted run
@@ -71,6 +72,9 @@ class BaselineCommandConfig:
     # add this run's training seeds to the baseline shipped in this folder (the same recipe and flags but
     # --training.seeds); its policy stays
     add_to: str | None = None
+    # with --add-to: a seed the baseline holds without its policy, run again and scored otherwise, has its rows
+    # replaced by this run's (refused without it: the rows held scored weights that are gone)
+    replace_seeds: bool = False
     fresh: bool = False  # delete OUT first instead of reusing its finished stages
     demos: DemosConfig = field(default_factory=DemosConfig)
     policy: PolicyConfig = SMALL_ACT
@@ -83,6 +87,8 @@ class BaselineCommandConfig:
             raise ConfigError(f"--until {self.until!r}: valid stages are {list(UNTIL)}")
         if self.ship and self.add_to:
             raise ConfigError("--ship makes a new baseline, --add-to adds seeds to a shipped one: give one of them")
+        if self.replace_seeds and not self.add_to:
+            raise ConfigError("--replace-seeds replaces the rows of seeds a baseline holds: give --add-to DIR too")
 
     def chosen(self) -> Recipe:
         """The recipe to run: the preset named ``recipe`` with these sections (its checks run again)."""
@@ -160,8 +166,8 @@ def main(argv: list[str] | None = None) -> int:
         addable(recipe, add_to)  # ConfigError before any work: another recipe, or seeds it holds with policies
     if args.fresh:
         shutil.rmtree(settings.out, ignore_errors=True)
-    run_pipeline(recipe, settings, shlex.join(["colorsort-baseline", *argv]), ship_to, add_to)  # DataConflictError:
-    # OUT holds a stage of other settings, nothing overwritten
+    # DataConflictError: OUT holds a stage of other settings, or a held seed scored otherwise; nothing overwritten
+    run_pipeline(recipe, settings, shlex.join(["colorsort-baseline", *argv]), ship_to, add_to, args.replace_seeds)
     return 0
 
 

@@ -53,11 +53,12 @@ class RunConfig:
 
 
 def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Path | None = None,
-                 add_to: Path | None = None) -> PipelineResults | None:
+                 add_to: Path | None = None, replace_seeds: bool = False) -> PipelineResults | None:
     """Every stage of ``recipe`` under ``settings.out``; the results (also written to ``out/results.json``), or None
     when ``settings.until`` stops before the evaluations. ``ship_to``: ship the first seed's policy there;
     ``add_to``: add this run's training seeds and their policies to the baseline shipped there (``ship.add_seeds``:
-    its learning curve is its own first seed's, so this run makes none)."""
+    its learning curve is its own first seed's, so this run makes none; ``replace_seeds``: a seed it holds without
+    its policy that scores otherwise replaces its rows)."""
     out = settings.out
     out.mkdir(parents=True, exist_ok=True)
     started, t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), time.perf_counter()
@@ -118,7 +119,7 @@ def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Pat
     if ship_to is not None:
         ship(recipe, shipped, results, plots, ship_to, command)
     if add_to is not None:
-        add_seeds(recipe, results, add_to, command, models)
+        add_seeds(recipe, results, add_to, command, models, replace_seeds)
     return results
 
 

@@ -151,7 +151,9 @@ class Sitting:
 class PipelineResults:
     """One run of the pipeline (``results.json``; shipped as ``scores.json``), with the sittings that added
     training seeds to it (``added``: their rows are in ``rows``; the curve stays the first seed's) and those that
-    ran held seeds again to keep their policies (``kept``: the rows they reproduced were there already)."""
+    ran held seeds again to keep their policies (``kept``: the rows they reproduced were there already); ``replaced``:
+    the earlier sittings, each with the seeds whose rows a later run replaced (their policies were not kept, and run
+    again they scored otherwise)."""
 
     recipe: dict  # Recipe.to_json(), or a shipped baseline's flat recipe of before the sections
     command: str
@@ -162,6 +164,7 @@ class PipelineResults:
     commit: str = ""  # the checkout's at shipping (``ship.commit``); "" in results.json
     added: tuple[Sitting, ...] = ()
     kept: tuple[Sitting, ...] = ()
+    replaced: tuple[Sitting, ...] = ()
 
     @property
     def seeds(self) -> tuple[int, ...]:
@@ -177,6 +180,8 @@ class PipelineResults:
             out["added"] = [s.to_json() for s in self.added]
         if self.kept:
             out["kept"] = [s.to_json() for s in self.kept]
+        if self.replaced:
+            out["replaced"] = [s.to_json() for s in self.replaced]
         return out
 
     @classmethod
@@ -185,7 +190,8 @@ class PipelineResults:
                    tuple(ScoreRow.from_json(r) for r in data["rows"]),
                    tuple(CurvePoint.from_json(p) for p in data.get("curve") or ()), data.get("commit", ""),
                    tuple(Sitting.from_json(s) for s in data.get("added", ())),
-                   tuple(Sitting.from_json(s) for s in data.get("kept", ())))
+                   tuple(Sitting.from_json(s) for s in data.get("kept", ())),
+                   tuple(Sitting.from_json(s) for s in data.get("replaced", ())))
 
     @classmethod
     def load(cls, path: Path) -> PipelineResults:

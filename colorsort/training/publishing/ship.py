@@ -5,7 +5,8 @@ another machine: the same recipe but its seeds, so the same demos) to a folder s
 policy, the first seed's, as it was, and keeps each added seed's policy beside it in ``seed<N>/``: a later
 sitting's run folder is on another machine, and a seed's held-out sweep needs its weights. A seed held without its
 policy there (added before the folders kept them) may be run again: its policy is kept when the run reproduces
-every episode the seed scored, and refused otherwise."""
+every episode the seed scored; a run that scores otherwise is refused, or with ``replace`` replaces the seed's rows
+(the sitting that made them is recorded as replaced)."""
 
 from __future__ import annotations
 
@@ -170,36 +171,49 @@ def unreproduced(held: PipelineResults, run: PipelineResults, seed: int) -> list
     return sorted({key[1] for key in theirs.keys() | ours.keys() if theirs.get(key) != ours.get(key)})
 
 
-def add_seeds(recipe: Recipe, results: PipelineResults, dest: Path, command: str,
-              models: dict[int, Path]) -> PipelineResults:
+def add_seeds(recipe: Recipe, results: PipelineResults, dest: Path, command: str, models: dict[int, Path],
+              replace_rows: bool = False) -> PipelineResults:
     """Add ``results``' rows (training seeds run in a later sitting of ``recipe``) to the baseline shipped in
     ``dest``: its scores, its plot against demos and its README, and each seed's policy (``models``, by seed) in
-    ``seed<N>/``; its policy, curve and first command stay. A seed it held already keeps its rows, and its policy is
-    kept only when the run reproduced every one of them (DataConflictError, nothing changed, otherwise). The merged
-    scores."""
+    ``seed<N>/``; its policy, curve and first command stay. A seed it held already keeps its rows when the run
+    reproduced every one of them; one that scored otherwise is refused (DataConflictError, nothing changed), or with
+    ``replace_rows`` has its rows replaced by the run's, in place. The merged scores."""
     shipped = addable(recipe, dest)
-    again = tuple(s for s in recipe.training.seeds if s in shipped.seeds)
-    new = tuple(s for s in recipe.training.seeds if s not in shipped.seeds)
-    for seed in again:
-        differ = unreproduced(shipped, results, seed)
-        if differ:
-            raise DataConflictError(f"training seed {seed} scored otherwise on {differ} than {dest} holds: this run's "
-                                    "policy is not the one scored there, so nothing was kept or changed")
+    held = tuple(s for s in recipe.training.seeds if s in shipped.seeds)
+    differ = {seed: v for seed in held if (v := unreproduced(shipped, results, seed))}
+    if differ and not replace_rows:
+        raise DataConflictError(
+            f"training seeds {list(differ)} scored otherwise than {dest} holds ({differ}): this run's policies are not "
+            "the ones scored there, so nothing was kept or changed; --replace-seeds replaces their rows with this "
+            "run's, keeping its policies")
     for seed in recipe.training.seeds:
         shutil.copytree(models[seed], seed_folder(dest, seed))
     sitting = partial(Sitting, command, commit(dest), results.started, results.wall_s)
-    seeds = shipped.seeds + new
+    new = tuple(s for s in recipe.training.seeds if s not in shipped.seeds or s in differ)
+    again = tuple(s for s in held if s not in differ)
+    rows = tuple(r for r in shipped.rows if r.seed not in differ) + tuple(r for r in results.rows if r.seed in new)
+    seeds = tuple(dict.fromkeys(r.seed for r in rows))
+    later = {x for a in shipped.added for x in a.seeds}
+    first = Sitting(shipped.command, shipped.commit, shipped.started, shipped.wall_s,
+                    tuple(x for x in shipped.seeds if x not in later))
+    made = [(s, tuple(x for x in s.seeds if x in differ)) for s in (first, *shipped.added)]
     merged_recipe = recipe.override({"training.seeds": seeds})
-    merged = replace(shipped, recipe=merged_recipe.to_json(),
-                     rows=shipped.rows + tuple(r for r in results.rows if r.seed in new),
-                     added=shipped.added + ((sitting(new),) if new else ()),
-                     kept=shipped.kept + ((sitting(again),) if again else ()))
+
+    def without_replaced(sittings: tuple[Sitting, ...]) -> tuple[Sitting, ...]:
+        return tuple(replace(s, seeds=tuple(x for x in s.seeds if x not in differ)) for s in sittings
+                     if set(s.seeds) - set(differ))
+
+    merged = replace(shipped, recipe=merged_recipe.to_json(), rows=rows,
+                     added=without_replaced(shipped.added) + ((sitting(new),) if new else ()),
+                     kept=without_replaced(shipped.kept) + ((sitting(again),) if again else ()),
+                     replaced=shipped.replaced + tuple(replace(s, seeds=gone) for s, gone in made if gone))
     (dest / "scores.json").write_text(json.dumps(merged.to_json(), indent=1))
     main = recipe.evaluation.main_variant
     plot_demos([r for r in merged.rows if r.variant == main], recipe.label, main, dest / "success_vs_demos.png")
     write_readme(merged_recipe, merged, dest)
     if new:
-        print(f"added training seeds {list(new)} to {dest} (now {list(seeds)})")
+        print(f"added training seeds {list(new)} to {dest} (now {list(seeds)})"
+              + (f"; the rows of {list(differ)} replaced" if differ else ""))
     if again:
         print(f"training seeds {list(again)} reproduced every episode {dest} holds of them: their policies kept in "
               f"{', '.join(str(seed_folder(dest, s)) for s in again)}")
@@ -246,6 +260,9 @@ def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     added += "".join(f" Training {s.named_seeds()} run again by `{s.command}` on commit {s.commit}, started "
                      f"{s.started} ({s.wall_s / 60:.0f} min): it reproduced every episode scored below, and its "
                      "policy was kept." for s in results.kept)
+    added += "".join(f" Training {s.named_seeds()} first added by `{s.command}` on commit {s.commit} (its policy not "
+                     "kept; run again, it scored otherwise): its rows were replaced by the later sitting's."
+                     for s in results.replaced)
     kept = [s for s in training.seeds[1:] if seed_folder(dest, s).is_dir()]
     beside = ""
     if kept:
