@@ -220,6 +220,11 @@ def add_seeds(recipe: Recipe, results: PipelineResults, dest: Path, command: str
     return merged
 
 
+def took(sitting: Sitting) -> str:
+    """How long a sitting ran: "77 min", or that it reused every stage (of an earlier run of the same flags)."""
+    return f"{sitting.wall_s / 60:.0f} min" if sitting.wall_s >= 30 else "every stage reused from an earlier run"
+
+
 def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     """``dest/README.md``: how the policy in ``dest`` was made and scored, from ``results`` (its rows' first
     training seed is the policy's)."""
@@ -256,9 +261,9 @@ def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     cameras = ",".join(demos.cameras) or "none"
     dagger = dagger_line(recipe, largest[0].frames)
     added = "".join(f" Training {s.named_seeds()} added later by `{s.command}` on commit {s.commit}, started "
-                    f"{s.started} ({s.wall_s / 60:.0f} min)." for s in results.added)
+                    f"{s.started} ({took(s)})." for s in results.added)
     added += "".join(f" Training {s.named_seeds()} run again by `{s.command}` on commit {s.commit}, started "
-                     f"{s.started} ({s.wall_s / 60:.0f} min): it reproduced every episode scored below, and its "
+                     f"{s.started} ({took(s)}): it reproduced every episode scored below, and its "
                      "policy was kept." for s in results.kept)
     added += "".join(f" Training {s.named_seeds()} first added by `{s.command}` on commit {s.commit} (its policy not "
                      "kept; run again, it scored otherwise): its rows were replaced by the later sitting's."
