@@ -740,7 +740,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     assert (shipped / "learning_curve.png").read_bytes() == curve_png
     readme = (shipped / "README.md").read_text()
     assert f"Training seed 1001 added later by `{sitting.command}`" in readme
-    assert "The policies of training seeds 1001 (each its checkpoint scored below) are in `seed1001/`" in readme
+    assert "The policy of training seed 1001 (its checkpoint scored below) is in `seed1001/`" in readme
     assert "each of the recipe's 2 training seeds (1000, 1001; this policy is seed 1000's)" in readme
     assert "| tracking | ACT, state | 4 | 3 steps (0.5 passes), scored at 2/3 after 2/6 min" in readme
     assert "| 1001 | 3 (chosen) |" in readme

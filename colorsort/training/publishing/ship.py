@@ -272,8 +272,9 @@ def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     beside = ""
     if kept:
         folders = ", ".join(f"`{seed_folder(dest, s).name}/`" for s in kept)
-        beside = (f"\nThe policies of training seeds {', '.join(map(str, kept))} (each its checkpoint scored below) "
-                  f"are in {folders}: `colorsort-eval --policy {seed_folder(dest, kept[0])} --variant "
+        whose = (f"The policy of training seed {kept[0]} (its checkpoint scored below) is" if len(kept) == 1 else
+                 f"The policies of training seeds {', '.join(map(str, kept))} (each its checkpoint scored below) are")
+        beside = (f"\n{whose} in {folders}: `colorsort-eval --policy {seed_folder(dest, kept[0])} --variant "
                   f"{evaluation.main_variant}`.\n")
     task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
     sha = results.commit or "unknown"
