@@ -5,8 +5,8 @@ another machine: the same recipe but its seeds, so the same demos) to a folder s
 policy, the first seed's, as it was, and keeps each added seed's policy beside it in ``seed<N>/``: a later
 sitting's run folder is on another machine, and a seed's held-out sweep needs its weights. A seed held without its
 policy there (added before the folders kept them) may be run again: its policy is kept when the run reproduces
-every episode the seed scored; a run that scores otherwise is refused, or with ``replace`` replaces the seed's rows
-(the sitting that made them is recorded as replaced)."""
+every episode the seed scored; a run that scores otherwise is refused, or with ``replace_rows``
+(``--replace-seeds``) replaces the seed's rows (the sitting that made them is recorded as replaced)."""
 
 from __future__ import annotations
 
