@@ -51,6 +51,15 @@ class StageError(ColorSortError, RuntimeError):
     """A stage, job or worker failed (its command and the end of its output are in the message)."""
 
 
+class Interrupted(ColorSortError, KeyboardInterrupt):
+    """A run stopped by Ctrl-C after ``finished`` of its ``total`` episodes (or items); what finished was kept."""
+
+    def __init__(self, finished: int, total: int, kept: str | None = None):
+        """``kept``: where what finished is (the message's end; default: how many finished)."""
+        super().__init__(f"interrupted: {kept or f'{finished} of {total} episodes finished'}")
+        self.finished, self.total = finished, total
+
+
 class PlanningError(ColorSortError, RuntimeError):
     """The expert could not plan a motion or a box (ruckig, the box pool)."""
 

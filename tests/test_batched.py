@@ -164,7 +164,7 @@ def test_warp_backend_arguments_are_checked(args, message, capsys):
 
 
 def test_the_expert_is_refused_on_the_warp_backend_by_name():
-    from colorsort.batched.evaluate import BatchedPolicy
+    from colorsort.benchmark.lockstep import BatchedPolicy
 
     with pytest.raises(ValueError, match="the expert reads the sensor camera"):
         BatchedPolicy("expert", "cpu", np.zeros(8), np.ones(8))
@@ -304,7 +304,7 @@ def test_only_a_policy_that_keeps_nothing_but_its_queue_of_actions_is_rolled():
     from lerobot.policies.act.configuration_act import ACTConfig
     from lerobot.policies.diffusion.configuration_diffusion import DiffusionConfig
 
-    from colorsort.batched.evaluate import restart_period
+    from colorsort.benchmark.lockstep import restart_period
 
     assert restart_period(ACTConfig(chunk_size=20, n_action_steps=10)) == 10
     assert restart_period(ACTConfig(chunk_size=20, n_action_steps=1, temporal_ensemble_coeff=0.01)) is None

@@ -1,117 +1,38 @@
 """Evaluate a policy on the batched cell: ``envs`` episodes at once, the policy on the cell's device.
 
 A world's episode ends as the CPU cell's does (``ColorSortGymEnv``: the variant's boxes have left play,
-or one was misplaced or dropped, or the step limit). Two ways to fill the worlds:
+or one was misplaced or dropped, or the step limit). The evaluator is the one the CPU cells use
+(``benchmark/lockstep.py``: rolling or waves, one ``BatchedPolicy``); ``WarpCells`` is the batched cell as its
+``Cells``, ``WaveFilms`` the films of its waves.
 
-- rolling (``run_rolling``), for policies whose only state is a queue of actions refilled for every world
-  at once (LeRobot's ACT, and Diffusion Policy on one observation): a world whose episode ended starts the
-  next seed at the queue's next refill, while the others run on, so a slow episode holds up no other;
-- waves (``run_waves``), as LeRobot's ``lerobot-eval`` runs a vector env, for any other policy and for
-  filmed evaluations: ``envs`` worlds start together, the policy is reset once per wave, and a world whose
-  episode ended runs on until its wave ends, nothing after its end counting.
-
-Each episode's result is the dict ``benchmark.evaluate.EpisodeRunner.episode`` writes, so reports and JSON
-are the same as the CPU cell's. A seed's episode is the same whichever world runs it, and when, up to the last
-bits of float32: a policy's batch of another size rounds differently, so a box may settle a few steps apart.
+Each episode's result is the ``EpisodeResult`` the CPU cell's evaluator writes, so reports and JSON are the same as
+the CPU cell's. A seed's episode is the same whichever world runs it, and when, up to the last bits of float32: a
+policy's batch of another size rounds differently, so a box may settle a few steps apart.
 """
 
 from __future__ import annotations
 
 import math
-import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from tqdm import tqdm
 
-from colorsort.batched.cell import BatchedCell, Record, check_device
+from colorsort.batched.cell import BatchedCell, Record, StepResult, check_device
 from colorsort.batched.films import Filming, FilmViewer, WaveRecording
 from colorsort.batched.kernels import OUTCOMES
 from colorsort.batched.schedule import COLOR_NAMES
 from colorsort.batched.spec import CellSpec, spec_for_variant
 from colorsort.benchmark.episode_result import EpisodeResult, box_record
+from colorsort.benchmark.lockstep import BatchedPolicy, Episode, WaveTiming, run_rolling, run_waves
 from colorsort.benchmark.metrics import EvalReport, aggregate
-from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras
 from colorsort.benchmark.report_page import choose_films
 from colorsort.cell.referee import BoxEvent, Outcome
 from colorsort.config import BIN_COLORS
 from colorsort.errors import ConfigError
 from colorsort.variants import Variant, get_variant
-
-
-@dataclass(frozen=True)
-class WaveTiming:
-    """How long a batched evaluation took [s], and how many control steps of all worlds it ran."""
-
-    seconds: float
-    control_steps: int
-    worlds: int
-
-
-class BatchedPolicy:
-    """A LeRobot checkpoint acting on every world at once, on a torch device; or ``random``."""
-
-    def __init__(self, spec: str, device: str, low: np.ndarray, high: np.ndarray):
-        import torch
-
-        check_policy_spec(spec)
-        self.name = spec
-        self.device = torch.device(device)
-        self.low = torch.as_tensor(low, dtype=torch.float32, device=self.device)
-        self.high = torch.as_tensor(high, dtype=torch.float32, device=self.device)
-        self.policy = None
-        if spec == "expert":
-            raise ConfigError("the expert reads the sensor camera and plans on the host: evaluate it with "
-                              "--backend cpu; the warp backend runs 'random' and LeRobot checkpoints")
-        self.cameras: tuple[str, ...] = ()
-        self.image_size: tuple[int, int] | None = None
-        self.restart_period: int | None = 1
-        if spec != "random":
-            self.cameras, self.image_size = checkpoint_cameras(spec)
-            from colorsort.benchmark.policies import LeRobotPolicy
-
-            loaded = LeRobotPolicy(spec, device=str(self.device))
-            self.policy = loaded.policy
-            self.preprocessor, self.postprocessor = loaded.preprocessor, loaded.postprocessor
-            self.restart_period = restart_period(self.policy.config)
-
-    def reset(self, seed: int) -> None:
-        import torch
-
-        self.generator = torch.Generator(device=self.device).manual_seed(seed)
-        torch.manual_seed(seed)
-        if self.policy is not None:
-            self.policy.reset()
-
-    def act(self, step, task: str):
-        """Actions (N, action size) for a ``BatchedCell`` step's observations."""
-        import torch
-
-        n = step.state.shape[0]
-        if self.policy is None:
-            u = torch.rand((n, len(self.low)), generator=self.generator, device=self.device)
-            return self.low + u * (self.high - self.low)
-        batch = {"observation.state": step.state.to(self.device),
-                 "observation.environment_state": step.env_state.to(self.device), "task": [task] * n}
-        for camera, image in step.images.items():  # as LeRobot's preprocess_observation: (N, 3, H, W) in [0, 1]
-            batch[f"observation.images.{camera}"] = image.to(self.device).permute(0, 3, 1, 2).float() / 255.0
-        with torch.no_grad():
-            return self.postprocessor(self.policy.select_action(self.preprocessor(batch)))
-
-
-def restart_period(config) -> int | None:
-    """Control steps between the points where a LeRobot policy holds no state of any world, or None.
-
-    ACT without temporal ensembling, and Diffusion Policy on one observation, keep nothing between
-    steps but their queue of actions, filled for every world at once and emptied every ``n_action_steps``
-    steps. At each such point a world may start a new episode and the policy acts on it as on a fresh
-    episode (``run_rolling``). Any other state (an ensemble of chunks, a queue of observations) gives None.
-    """
-    steps = getattr(config, "n_action_steps", None)
-    if steps is None or getattr(config, "temporal_ensemble_coeff", None) is not None:
-        return None
-    return int(steps) if getattr(config, "n_obs_steps", 1) == 1 else None
 
 
 def tally(n_events: np.ndarray, outcome: np.ndarray, boxes: int) -> dict[str, np.ndarray]:
@@ -138,89 +59,51 @@ def episode_result(record: Record, world: int, variant: Variant, steps: int, sim
     return EpisodeResult.judged(int(record.seeds[world]), steps, sim_time, events, variant.boxes, boxes)
 
 
-def run_waves(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
-              progress: bool = True, filming: Filming | None = None) -> tuple[list[EpisodeResult], WaveTiming]:
-    """Every seed's episode, in waves of ``cell.worlds``; results in seed order. With ``filming``, each wave is
-    recorded and the episodes its report may film kept (``films.py``)."""
-    n = cell.worlds
-    task = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours."
-    results: list[EpisodeResult] = []
-    bar = tqdm(total=len(seeds), desc=f"{policy.name} on {variant.name} (warp)", unit="episode", disable=not progress)
-    start, control_steps = time.perf_counter(), 0
-    for first in range(0, len(seeds), n):
-        wave = seeds[first : first + n]
-        padded = wave + [wave[-1]] * (n - len(wave))  # idle worlds repeat a seed; their results are dropped
-        out = cell.reset(padded)
-        recording = WaveRecording(cell) if filming is not None else None
-        if recording is not None:
-            recording.add()
-        policy.reset(int(wave[0]))
-        ended = np.zeros(n, bool)
-        ended[len(wave):] = True
-        finished: dict[int, EpisodeResult] = {}
-        for step in range(1, max_steps + 1):
-            out = cell.step(policy.act(out, task))
-            control_steps += 1
-            if recording is not None:
-                recording.add()
-            counts = tally(cell.n_events.numpy(), cell.ev_outcome.numpy(), variant.boxes)
-            stop = counts["done"] | counts["failed"] | (step >= max_steps)
-            new = np.flatnonzero(stop & ~ended)
-            if len(new):
-                record = cell.record()  # one copy to the host for every world that ended now
-                for w in new:
-                    finished[int(w)] = episode_result(record, int(w), variant, step, step * cell.control_dt)
-                bar.update(len(new))
-            ended |= stop
-            if ended.all():
-                break
-        wave_results = [finished[w] for w in range(len(wave))]
-        if filming is not None and recording is not None:
-            filming.wave_ended(recording, wave_results)
-        results += wave_results
-    bar.close()
-    return results, WaveTiming(time.perf_counter() - start, control_steps, n)
+class WarpCells:
+    """The batched cell as ``lockstep.Cells``: every world stepped each step, the ended ones uncounted."""
+
+    def __init__(self, cell: BatchedCell, variant: Variant):
+        self.cell, self.variant, self.worlds = cell, variant, cell.worlds
+
+    def reset(self, episodes: Sequence[Episode], worlds: np.ndarray) -> StepResult:
+        if any(e.shift for e in episodes):
+            raise ConfigError("the batched cell (MuJoCo Warp) applies no held-out shift yet")
+        seeds = [e.seed for e in episodes]
+        whole = len(worlds) == self.worlds and bool((np.asarray(worlds) == np.arange(self.worlds)).all())
+        return self.cell.reset(seeds) if whole else self.cell.reset(seeds, worlds=np.asarray(worlds))
+
+    def step(self, actions: Any, active: np.ndarray) -> StepResult:
+        return self.cell.step(actions)
+
+    def ended(self) -> np.ndarray:
+        counts = tally(self.cell.n_events.numpy(), self.cell.ev_outcome.numpy(), self.variant.boxes)
+        return counts["done"] | counts["failed"]
+
+    def results(self, worlds: np.ndarray, steps: np.ndarray) -> list[EpisodeResult]:
+        if not len(worlds):
+            return []
+        record = self.cell.record()  # one copy to the host for every world that ended now
+        return [episode_result(record, int(w), self.variant, int(n), float(n) * self.cell.control_dt)
+                for w, n in zip(worlds, steps, strict=True)]
 
 
-def run_rolling(cell: BatchedCell, policy: BatchedPolicy, variant: Variant, seeds: list[int], max_steps: int,
-                period: int, progress: bool = True) -> tuple[list[EpisodeResult], WaveTiming]:
-    """Every seed's episode, ``cell.worlds`` at a time; a world whose episode ended starts the next seed at the
-    policy's next restart point (every ``period`` control steps, ``restart_period``) while the others run on.
-    Results in seed order, each as the episode would be on its own: it starts at a restart point, where the
-    policy holds nothing of that world."""
-    n = cell.worlds
-    task = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours."
-    first = seeds[:n]
-    out = cell.reset(first + [first[-1]] * (n - len(first)))  # idle worlds repeat a seed; never counted
-    policy.reset(int(seeds[0]))
-    episode = np.arange(n)  # each world's index into seeds
-    start = np.zeros(n, int)  # the control step its episode began at
-    active = episode < len(first)
-    upcoming = len(first)
-    results: dict[int, EpisodeResult] = {}
-    bar = tqdm(total=len(seeds), desc=f"{policy.name} on {variant.name} (warp)", unit="episode", disable=not progress)
-    begin, t = time.perf_counter(), 0
-    while active.any() or upcoming < len(seeds):
-        if t % period == 0 and upcoming < len(seeds) and not active.all():
-            free = np.flatnonzero(~active)[: len(seeds) - upcoming]
-            out = cell.reset(seeds[upcoming : upcoming + len(free)], worlds=free)
-            episode[free] = np.arange(upcoming, upcoming + len(free))
-            start[free], active[free] = t, True
-            upcoming += len(free)
-        out = cell.step(policy.act(out, task))
-        t += 1
-        steps = t - start
-        counts = tally(cell.n_events.numpy(), cell.ev_outcome.numpy(), variant.boxes)
-        ended = np.flatnonzero(active & (counts["done"] | counts["failed"] | (steps >= max_steps)))
-        if len(ended):
-            record = cell.record()  # one copy to the host for every world that ended now
-            for w in ended:
-                results[int(episode[w])] = episode_result(record, int(w), variant, int(steps[w]),
-                                                          steps[w] * cell.control_dt)
-            active[ended] = False
-            bar.update(len(ended))
-    bar.close()
-    return [results[k] for k in range(len(seeds))], WaveTiming(time.perf_counter() - begin, t, n)
+class WaveFilms:
+    """``lockstep.WaveFilm`` over ``films.Filming``: each wave recorded on the device, its kept episodes drawn."""
+
+    def __init__(self, filming: Filming, cell: BatchedCell):
+        self.filming, self.cell = filming, cell
+        self.recording: WaveRecording | None = None
+
+    def start(self) -> None:
+        self.recording = WaveRecording(self.cell)
+
+    def add(self) -> None:
+        assert self.recording is not None
+        self.recording.add()
+
+    def end(self, results: list[EpisodeResult]) -> None:
+        assert self.recording is not None
+        self.filming.wave_ended(self.recording, results)
 
 
 @dataclass(frozen=True)
@@ -255,11 +138,17 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
     spawns = int(np.ceil(max_steps / spec.control_freq / variant.task_config.spawn_period)) + 2
     cell = BatchedCell(spec, variant, min(envs, len(seeds)), device=device, max_boxes=max(variant.boxes + 2, spawns),
                        cameras=policy.cameras, image_size=policy.image_size or (64, 64))
+    cells, runs = WarpCells(cell, variant), [Episode(s) for s in seeds]
     filming = Filming(FilmViewer(spec, variant), videos) if film else None
+    task, desc = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours.", \
+        f"{policy.name} on {variant.name} (warp)"
     if filming is None and policy.restart_period is not None:
-        results, timing = run_rolling(cell, policy, variant, seeds, max_steps, policy.restart_period, progress)
+        found, timing = run_rolling(cells, policy, runs, max_steps, policy.restart_period, task, progress,
+                                    desc=desc)
     else:  # films keep whole waves of states; a policy with other state runs whole waves
-        results, timing = run_waves(cell, policy, variant, seeds, max_steps, progress, filming)
+        found, timing = run_waves(cells, policy, runs, max_steps, task, progress,
+                                  WaveFilms(filming, cell) if filming is not None else None, desc=desc)
+    results = [r for r in found if r is not None]
     report = aggregate(str(policy_spec), variant.name, results)
     films: dict[int, bytes] = {}
     if filming is not None:

@@ -2,27 +2,32 @@
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``seed + k``), so the same call
 gives the same numbers whatever the executor (local processes or Ray), its workers or the job
-size. Each job builds one env and one policy and runs at most ``shard_size`` episodes. The
-metrics are ``metrics.py``'s; the command line is ``colorsort-eval`` (``cli/eval.py``).
+size. Each job runs at most ``shard_size`` episodes: on one env and one policy (``batch_size`` 1), or on
+``batch_size`` cells stepped together with one policy forward a step (``lockstep.py``, ``cpu_cells.py``). Each
+finished episode reaches the caller as it finishes (a journal keeps it: Ctrl-C loses none). The metrics are
+``metrics.py``'s; the command line is ``colorsort-eval`` (``cli/eval.py``).
 """
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
 
-from colorsort.benchmark.episode_result import EpisodeResult, box_record
+from colorsort.benchmark.cpu_cells import CpuCells, WorldPolicies, cpu_episode_result
+from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.filming import EpisodeFilm
+from colorsort.benchmark.lockstep import BatchedPolicy, Episode, LockstepPolicy, run_rolling, run_waves
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
+from colorsort.benchmark.sweep_journal import Key
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
-from colorsort.cell.plant import Grip
 from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.envs.rollout import GymEpisode, Observer, rollout
-from colorsort.errors import ConfigError, StageError
+from colorsort.errors import ConfigError, Interrupted, StageError
 from colorsort.executors.base import (
     DEFAULT_SHARD_SIZE,
     ExecutorConfig,
@@ -59,6 +64,8 @@ class EvalConfig:
     episode_length: int | None = None  # steps before truncation; None: the variant's time limit
     film: bool = False  # film every episode (``filming.py``): its mp4 bytes in its result's ``video``
     shift: tuple[str, ...] = ()  # held-out shifts, ``NAME:LEVEL`` (``colorsort.shifts``); the env applies them
+    batch_size: int = 1  # cells a worker steps together, one policy forward over them a step (``lockstep.py``)
+    precision: str = "float32"  # a learned policy's forward: float32, or bfloat16 under CPU autocast (batched)
 
 
 # torch threads of a learned policy in each env's process: with torch's default (one per core) envs
@@ -66,16 +73,29 @@ class EvalConfig:
 POLICY_THREADS = 1
 
 
+@contextmanager
+def policy_threads(spec: str) -> Iterator[None]:
+    """``POLICY_THREADS`` torch threads while a learned policy runs here; the process's own count back after (this
+    process may be the caller's)."""
+    if spec in ("expert", "random"):
+        yield
+        return
+    import torch
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(POLICY_THREADS)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
 class EpisodeRunner:
-    """One env and one policy, built once per process, running episodes by seed."""
+    """One env and one policy, built once per process, running episodes by seed (``--batch-size 1``)."""
 
     def __init__(self, settings: EvalConfig):
-        self.threads_before: int | None = None
-        if settings.policy not in ("expert", "random"):
-            import torch
-
-            self.threads_before = torch.get_num_threads()
-            torch.set_num_threads(POLICY_THREADS)
+        self._threads = policy_threads(settings.policy)
+        self._threads.__enter__()
         self.policy = make_policy(settings.policy)
         self.film = settings.film
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
@@ -86,36 +106,27 @@ class EpisodeRunner:
     def close(self) -> None:
         """Close the env; give this process back the torch threads it had (it may be the caller's)."""
         self.env.close()
-        if self.threads_before is not None:
-            import torch
-
-            torch.set_num_threads(self.threads_before)
+        self._threads.__exit__(None, None, None)
 
     def episode(self, seed: int) -> EpisodeResult:
         """Run the episode of ``seed``: its figures, how it ended, each box's outcome (and its film)."""
         obs, _ = self.env.reset(seed=seed)
         self.policy.reset(self.env, seed)
         film = EpisodeFilm(self.env) if self.film else None
-        observers = [Filming(film, self.policy)] if film is not None else []
+        observers = [PhaseFilming(film, self.policy)] if film is not None else []
         try:
             info = rollout(GymEpisode(self.env), obs, self.policy.act, observers).info
         except BaseException:
             if film is not None:
                 film.discard()
             raise
-        env = self.env.env
-        placed = {p.serial: p for p in env.placements}
-        gripped = {g.serial: g for g in env.grips}  # a box sealed twice: the last seal
-        boxes = [box_record(e, placed[e.serial].offset, placed[e.serial].yaw, *grip_fields(gripped.get(e.serial)))
-                 for e in env.events[: self.env.variant.boxes]]
-        result = EpisodeResult.judged(seed, self.env.steps, info["sim_time"], env.events, self.env.variant.boxes,
-                                      boxes, env.shifts.record)  # each shift's level and its draws this episode
+        result = cpu_episode_result(self.env, seed, self.env.steps, info["sim_time"])
         if film is not None:
             result.video = film.finish()
         return result
 
 
-class Filming(Observer):
+class PhaseFilming(Observer):
     """Films an episode: its reset, then every step, with the policy's phase where it has one."""
 
     def __init__(self, film: EpisodeFilm, policy: Any):
@@ -128,67 +139,84 @@ class Filming(Observer):
         self.film.add(getattr(self.policy, "phase", None))
 
 
-def grip_fields(grip: Grip | None) -> tuple[float | None, float | None]:
-    """How the cup held a box: ``grip.offset`` [m] off the cup's axis and ``grip.yaw`` [deg] against the cup
-    (None, None for a box never sealed)."""
-    return (None, None) if grip is None else (grip.offset, grip.yaw)
-
-
 PRELOAD = ("colorsort.benchmark.evaluate",)  # what worker processes import once, before they fork
 
 
 @dataclass(frozen=True)
 class EvalJob:
-    """Episodes of one variant, by seed: one task of the executor."""
+    """Episodes of one variant, each its seed and shifts: one task of the executor."""
 
     settings: EvalConfig
-    seeds: tuple[int, ...]
+    episodes: tuple[Episode, ...]
+
+    @property
+    def key(self) -> str:
+        first = self.episodes[0]
+        return f"{self.settings.variant}:{shift_label(parse_shifts(first.shift))}:{first.seed}"
 
 
-class _Stopped(Exception):
-    """The evaluation was asked to stop."""
+Finished = tuple[str, tuple[str, ...], EpisodeResult]  # a job's message: the variant, the shifts, the result
 
 
-def run_job(job: EvalJob, ctx: TaskContext) -> list[EpisodeResult]:
-    """The task: one env and one policy, the job's episodes in seed order; one message per episode."""
+def run_job(job: EvalJob, ctx: TaskContext) -> int:
+    """The task: the job's episodes in order, each sent as it finishes (``Finished``: the caller keeps them as
+    they arrive); on a stop (Ctrl-C) it starts no more. Returns how many it finished. ``batch_size`` 1: one env
+    and one policy, an episode at a time; more: ``batch_size`` cells stepped together, one policy forward a step
+    (``lockstep.py``)."""
+    if job.settings.batch_size > 1:
+        return run_lockstep_job(job, ctx)
     runner = EpisodeRunner(job.settings)
     results = []
     try:
-        for seed in job.seeds:
+        for episode in job.episodes:
             if ctx.stopping():
-                raise _Stopped(f"stopped before seed {seed}")
-            results.append(runner.episode(seed))
-            ctx.send(job.settings.variant)
+                break
+            if episode.shift != runner.env.shift:
+                runner.env.set_shift(episode.shift)
+            results.append(runner.episode(episode.seed))
+            ctx.send((job.settings.variant, episode.shift, results[-1]))
     finally:
         runner.close()
-    return results
+    return len(results)
 
 
-def run_episodes(jobs: list[EvalJob], executor: ExecutorConfig = ExecutorConfig(), progress: bool = True,
-                 desc: str = "evaluating") -> tuple[list[list[EpisodeResult]], int]:
-    """Run every job on ``executor``; returns each job's episode results (in seed order) and how many
-    jobs ran again because their process died.
+def run_lockstep_job(job: EvalJob, ctx: TaskContext) -> int:
+    """``run_job`` on ``batch_size`` CPU cells stepped together: rolling where the policy allows, else waves."""
+    s = job.settings
+    variant = get_variant(s.variant)
+    worlds = min(s.batch_size, len(job.episodes))
+    with policy_threads(s.policy):
+        cells = CpuCells(variant, worlds, s.cameras, s.image_size, s.episode_length, s.film)
+        try:
+            policy: LockstepPolicy
+            if s.policy in ("expert", "random"):
+                policy = WorldPolicies(s.policy, worlds)
+            else:
+                low, high = cells.envs[0].action_space.low, cells.envs[0].action_space.high
+                policy = BatchedPolicy(s.policy, "cpu", low, high, s.precision)
 
-    Episodes are independent (each starts from its seed), so the results are the same whatever the
-    executor, its workers or the way seeds are split into jobs.
+            def sent(k: int, result: EpisodeResult) -> None:
+                ctx.send((s.variant, job.episodes[k].shift, result))
 
-    Raises:
-        RuntimeError: a job failed (its traceback), or the run was interrupted.
-    """
-    tasks = [(f"{j.settings.variant}:{shift_label(parse_shifts(j.settings.shift))}:{j.seeds[0]}", run_job, j)
-             for j in jobs]
-    results = run_jobs(tasks, sum(len(j.seeds) for j in jobs), executor, progress, desc, with_attempts=True)
-    return [r.value for r in results], sum(r.attempts > 1 for r in results)
+            if policy.restart_period is not None:
+                found, _ = run_rolling(cells, policy, job.episodes, cells.max_steps, policy.restart_period,
+                                       cells.task, progress=False, stop=ctx.stopping, on_result=sent)
+            else:
+                found, _ = run_waves(cells, policy, job.episodes, cells.max_steps, cells.task, progress=False,
+                                     stop=ctx.stopping, on_result=sent)
+        finally:
+            cells.close()
+    return sum(r is not None for r in found)
 
 
 def run_jobs(tasks: list[tuple[str, Callable, Any]], episodes: int, executor: ExecutorConfig, progress: bool,
-             desc: str, with_attempts: bool = False, on_message: Callable[[Any], None] | None = None) -> list:
+             desc: str, on_message: Callable[[Any], None] | None = None) -> list:
     """Run ``(key, function, job)`` tasks on ``executor`` with a progress bar of ``episodes`` (each task sends one
-    message an episode, which ``on_message`` is also given as it arrives); each task's value in order (its
-    ``TaskResult`` with ``with_attempts``).
+    message an episode, which ``on_message`` is also given as it arrives); each task's value in order (None for
+    a task a stop kept from starting).
 
     Raises:
-        RuntimeError: a task failed (its traceback), or the run was interrupted.
+        StageError: a task failed (its traceback).
     """
     bar = tqdm(total=episodes, desc=desc, unit="episode", disable=not progress)
     try:
@@ -200,10 +228,38 @@ def run_jobs(tasks: list[tuple[str, Callable, Any]], episodes: int, executor: Ex
         results = make_executor(executor, PRELOAD, forwarded_env()).run([Task(*t) for t in tasks], message)
     finally:
         bar.close()
-    failed = [r for r in results if not r.ok]
+    failed = [r for r in results if r.error is not None]
     if failed:
-        raise StageError("evaluation stopped: " + "; ".join(r.error or f"{r.key} was stopped" for r in failed))
-    return results if with_attempts else [r.value for r in results]
+        raise StageError("evaluation stopped: " + "; ".join(str(r.error) for r in failed))
+    return [r.value for r in results]
+
+
+def run_episodes(work: list[tuple[EvalConfig, list[Episode]]], executor: ExecutorConfig, shard_size: int,
+                 progress: bool, desc: str, on_episode: Callable[[Finished], None] | None = None) -> list[Finished]:
+    """Each ``(settings, episodes)`` pair's episodes in jobs of at most ``shard_size`` (enough jobs to keep every
+    worker busy) on ``executor``, all at once; every finished one as ``Finished``, each also given to
+    ``on_episode`` as it arrives. The same whatever the executor, its workers, the jobs and ``batch_size``: an
+    episode starts from its seed and shifts alone. A stop (Ctrl-C) returns those that finished."""
+    per = max(1, executor.workers // max(1, len(work)))  # jobs per pair that keep every worker busy
+    jobs = [EvalJob(settings, tuple(block)) for settings, episodes in work if episodes
+            for block in chunks(episodes, shard_size, per)]
+    found: dict[tuple[str, tuple[str, ...], int], Finished] = {}  # a job run again (its process died) sends again
+
+    def arrived(message: Finished) -> None:
+        key = (message[0], message[1], message[2].seed)
+        if key not in found and on_episode is not None:
+            on_episode(message)
+        found[key] = message
+
+    if jobs:
+        run_jobs([(job.key, run_job, job) for job in jobs], sum(len(j.episodes) for j in jobs), executor, progress,
+                 desc, arrived)
+    return list(found.values())
+
+
+def arm_key(variant: str, shift: tuple[str, ...]) -> str:
+    """How a plain evaluation's journal names the arm of an episode: its variant and its shifts' label."""
+    return f"{variant}/{shift_label(parse_shifts(shift))}"
 
 
 @dataclass(frozen=True)
@@ -218,28 +274,43 @@ def run_evaluation(policy_spec: str, variant_names: list[str], episodes: int, *,
                    image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE, cameras: tuple[str, ...] = DEFAULT_CAMERAS,
                    progress: bool = True, episode_length: int | None = None,
                    executor: ExecutorConfig = ExecutorConfig(), shard_size: int = DEFAULT_SHARD_SIZE,
-                   film: bool = False, shift: tuple[str, ...] = ()) -> Evaluation:
+                   film: bool = False, shift: tuple[str, ...] = (), batch_size: int = 1, precision: str = "float32",
+                   done: Mapping[Key, EpisodeResult] | None = None,
+                   on_episode: Callable[[str, EpisodeResult], None] | None = None) -> Evaluation:
     """``episodes`` episodes of a policy on each variant, all spread over ``executor`` in jobs of at most
-    ``shard_size`` episodes; with ``film``, every episode is filmed in the process that runs it; with ``shift``
-    (``NAME:LEVEL`` texts), under those held-out shifts, on ``SHIFT_SEEDS`` unless ``seed`` is given."""
+    ``shard_size`` episodes, each job ``batch_size`` cells stepped together; with ``film``, every episode is filmed
+    in the process that runs it; with ``shift`` (``NAME:LEVEL`` texts), under those held-out shifts, on
+    ``SHIFT_SEEDS`` unless ``seed`` is given. Episodes in ``done`` (a journal's, keyed ``(arm_key, seed)``) are
+    not run again; ``on_episode(arm_key, result)`` is called as each new one finishes.
+
+    Raises:
+        Interrupted: the run was stopped (Ctrl-C); the episodes that finished went to ``on_episode``.
+    """
     check_policy_spec(policy_spec)
     shift = tuple(str(s) for s in parse_shifts(shift))
     variants = [get_variant(name) for name in variant_names]
     path = policy_spec if policy_spec in ("expert", "random") else str(Path(policy_spec).resolve())  # for any worker
-    jobs, owner = [], []
-    per_variant = max(1, executor.workers // len(variants))  # jobs per variant that keep every worker busy
-    for k, variant in enumerate(variants):
-        settings = EvalConfig(path, variant.name, (image_size[0], image_size[1]), tuple(cameras), episode_length,
-                                film, shift)
-        for block in chunks(episode_seeds(variant, episodes, seed, bool(shift)), shard_size, per_variant):
-            jobs.append(EvalJob(settings, tuple(block)))
-            owner.append(k)
-    results, _ = run_episodes(jobs, executor, progress, desc=f"{policy_spec} on {', '.join(variant_names)}")
-    films = {(job.settings.variant, r.seed): r.video for job, rs in zip(jobs, results, strict=True)
-             for r in rs if r.video is not None}
-    per = [[r for job, rs in zip(owner, results, strict=True) if job == k for r in rs] for k in range(len(variants))]
+    done = done or {}
+    planned = {v.name: episode_seeds(v, episodes, seed, bool(shift)) for v in variants}
+    found = {(v, s): done[(arm_key(v, shift), s)] for v, seeds in planned.items() for s in seeds
+             if (arm_key(v, shift), s) in done}
+    work = [(EvalConfig(path, v, (image_size[0], image_size[1]), tuple(cameras), episode_length, film, shift,
+                        batch_size, precision), [Episode(s, shift) for s in seeds if (v, s) not in found])
+            for v, seeds in planned.items()]
+
+    def arrived(message: Finished) -> None:
+        if on_episode is not None:
+            on_episode(arm_key(message[0], message[1]), message[2])
+
+    for variant, _, result in run_episodes(work, executor, shard_size, progress,
+                                           f"{policy_spec} on {', '.join(variant_names)}", arrived):
+        found[(variant, result.seed)] = result
+    total = sum(len(seeds) for seeds in planned.values())
+    if len(found) < total:
+        raise Interrupted(len(found), total)
+    films = {key: r.video for key, r in found.items() if r.video is not None}
     label = shift_label(parse_shifts(shift))
-    reports = [aggregate(str(policy_spec), v.name, rs, label) for v, rs in zip(variants, per, strict=True)]
+    reports = [aggregate(str(policy_spec), v, [found[(v, s)] for s in seeds], label) for v, seeds in planned.items()]
     return Evaluation(reports, films)
 
 

@@ -1,8 +1,9 @@
 """A policy's whole held-out sweep: the control arm and every shift at every level, on the same seeds.
 
 Every arm runs on ``SHIFT_SEEDS`` (episode k on the k-th), so arm and control differ only by the shift. The arms'
-episodes are dealt into one job per worker; a job builds one env and one policy and switches the env's shifts
-between arms (``ColorSortGymEnv.set_shift``), so a sweep of 49 arms builds two envs on two workers, not 49.
+episodes are dealt into one job per worker; a job builds one env (or ``batch_size`` cells) and one policy and
+switches the env's shifts between arms (``ColorSortGymEnv.set_shift``), so a sweep of 49 arms builds two envs on
+two workers, not 49.
 Relative success (shifted / control) has a conservative 95% interval: the arm's Wilson bounds over the control's
 (low / high, high / low), which stays honest where both rates sit at 100% (a ratio's usual log interval collapses
 to a point there).
@@ -15,13 +16,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from colorsort.benchmark.episode_result import EpisodeResult
-from colorsort.benchmark.evaluate import EpisodeRunner, EvalConfig, run_jobs
+from colorsort.benchmark.evaluate import EvalConfig, Finished, run_episodes
+from colorsort.benchmark.lockstep import Episode
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec
 from colorsort.benchmark.sweep_journal import Key
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
-from colorsort.errors import ConfigError
-from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig, TaskContext, chunks
+from colorsort.errors import ConfigError, Interrupted
+from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.shifts import LEVELS, SHIFTS, parse_shifts, shift_label
 from colorsort.variants import SHIFT_SEEDS, get_variant
 
@@ -66,61 +68,47 @@ def sweep_arms(episodes: int, side_episodes: int, levels: tuple[int, ...] = (1, 
                                        for n in names for lv in levels]
 
 
-@dataclass(frozen=True)
-class SweepJob:
-    """Episodes of several arms, by (arm index, shift, seed): one task of the executor, one env and one policy."""
-
-    settings: EvalConfig  # without a shift: the job sets each arm's
-    episodes: tuple[tuple[int, tuple[str, ...], int], ...]
-
-    @property
-    def key(self) -> str:
-        return f"{self.settings.variant}:sweep:{self.episodes[0][0]}:{self.episodes[0][2]}"
-
-
-def run_sweep_job(job: SweepJob, ctx: TaskContext) -> list[tuple[int, EpisodeResult]]:
-    """The task: one env and one policy, the job's episodes in order, the env's shifts switched between arms;
-    each finished episode sent as ``(arm index, result)`` (the journal writes it as it arrives)."""
-    runner = EpisodeRunner(job.settings)
-    results = []
-    try:
-        for arm, shift, seed in job.episodes:
-            if shift != runner.env.shift:
-                runner.env.set_shift(shift)
-            results.append((arm, runner.episode(seed)))
-            ctx.send(results[-1])
-    finally:
-        runner.close()
-    return results
-
-
 def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE,
               cameras: tuple[str, ...] = DEFAULT_CAMERAS, episode_length: int | None = None,
               executor: ExecutorConfig = ExecutorConfig(), shard_size: int = DEFAULT_SHARD_SIZE,
               progress: bool = True, done: Mapping[Key, EpisodeResult] | None = None,
-              on_episode: Callable[[str, EpisodeResult], None] | None = None) -> list[EvalReport]:
+              on_episode: Callable[[str, EpisodeResult], None] | None = None, batch_size: int = 1,
+              precision: str = "float32") -> list[EvalReport]:
     """Every arm's report, in order (the control's ``shift`` is ``none``); the same whatever the executor, its
-    workers and ``shard_size`` (episodes a job, at most). Episodes in ``done`` (by arm shift and seed: a
-    ``SweepJournal``'s) are not run again; ``on_episode(arm shift, result)`` is called as each new one finishes."""
+    workers, ``shard_size`` (episodes a job, at most) and ``batch_size`` (cells a job steps together). Episodes in
+    ``done`` (by arm shift and seed: a ``SweepJournal``'s) are not run again; ``on_episode(arm shift, result)`` is
+    called as each new one finishes.
+
+    Raises:
+        Interrupted: the sweep was stopped (Ctrl-C); the episodes that finished went to ``on_episode``.
+    """
     check_policy_spec(policy)
     get_variant(variant)
     done = done or {}
     path = policy if policy in ("expert", "random") else str(Path(policy).resolve())
-    settings = EvalConfig(path, variant, image_size, tuple(cameras), episode_length)
-    episodes = [(k, () if arm.shift == CONTROL else (arm.shift,), seed)
-                for k, arm in enumerate(arms) for shift, seed in arm.keys if (shift, seed) not in done]
-    jobs = [SweepJob(settings, tuple(block)) for block in chunks(episodes, shard_size, executor.workers)]
+    settings = EvalConfig(path, variant, image_size, tuple(cameras), episode_length, batch_size=batch_size,
+                          precision=precision)
+    episodes = [Episode(seed, () if shift == CONTROL else (shift,))
+                for arm in arms for shift, seed in arm.keys if (shift, seed) not in done]
 
-    def finished(message: tuple[int, EpisodeResult]) -> None:
+    def finished(message: Finished) -> None:
         if on_episode is not None:
-            on_episode(arms[message[0]].shift, message[1])
+            on_episode(arm_shift(message[1]), message[2])
 
-    results = run_jobs([(job.key, run_sweep_job, job) for job in jobs], len(episodes), executor, progress,
-                       desc=f"{policy} on {variant}: {len(arms)} arms", on_message=finished) if jobs else []
-    found = {**done, **{(arms[k].shift, r.seed): r for job_results in results for k, r in job_results}}
+    found = {**done, **{(arm_shift(shift), r.seed): r for _, shift, r in
+                        run_episodes([(settings, episodes)], executor, shard_size, progress,
+                                     f"{policy} on {variant}: {len(arms)} arms", finished)}}
+    wanted = [key for a in arms for key in a.keys]
+    if any(key not in found for key in wanted):
+        raise Interrupted(sum(key in found for key in wanted), len(wanted))
     return [aggregate(policy, variant, [found[key] for key in a.keys],
                       shift_label(parse_shifts(() if a.shift == CONTROL else (a.shift,))))
             for a in arms]
+
+
+def arm_shift(shift: tuple[str, ...]) -> str:
+    """An episode's arm as the journal names it: its shift, or ``none`` for the control."""
+    return shift[0] if shift else CONTROL
 
 
 def relative(report: EvalReport, control: EvalReport) -> tuple[float | None, tuple[float, float] | None]:

@@ -47,11 +47,14 @@ import shlex
 import shutil
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 from colorsort.benchmark.evaluate import Evaluation, observation_settings, run_evaluation
+from colorsort.benchmark.lockstep import PRECISIONS
 from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
 from colorsort.benchmark.report_page import choose_films, write_report
@@ -59,7 +62,7 @@ from colorsort.benchmark.shift_sweep import format_sweep, run_sweep, sweep_arms,
 from colorsort.benchmark.sweep_journal import SweepJournal, header, journal_path
 from colorsort.cli.config_args import Spelling, parse_config
 from colorsort.cli.run import guarded
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, Interrupted
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
 from colorsort.results import machine
@@ -93,7 +96,6 @@ class SweepConfig:
     shifts: tuple[str, ...] = ()  # the shifts to sweep (default: every shift); --sweep-shifts
     levels: tuple[int, ...] = (1, 2, 3)  # the levels to sweep; --levels
     side_episodes: int | None = None  # episodes at levels other than 2 (default: --episodes); --side-episodes
-    resume: bool = False  # run only the episodes the journal of --json's sweep lacks (<json>.partial.jsonl); --resume
 
     def __post_init__(self) -> None:
         if not self.levels or any(v not in LEVELS[1:] for v in self.levels):
@@ -117,7 +119,13 @@ class EvalCommandConfig:
     # --executor.name ray): each in its own process or Ray task, the same numbers whatever N
     executor: ExecutorConfig = field(default_factory=ExecutorConfig)
     shard_size: int = DEFAULT_SHARD_SIZE  # episodes per job, at most (fewer where that keeps every worker busy)
-    json: str | None = None  # write the metrics as JSON here
+    # CPU cells each worker steps together, one batched policy forward a control step (--envs W: W x N cells)
+    batch_size: int = 1
+    # a learned policy's forward: float32, or bfloat16 (CPU autocast, --batch-size above 1; docs/speed.md says where
+    # its scores hold); the printout and --json say which
+    precision: str = "float32"
+    json: str | None = None  # write the metrics as JSON here; each finished episode is kept in <json>.partial.jsonl
+    resume: bool = False  # run only the episodes the journal of --json (<json>.partial.jsonl) lacks
     backend: str = "cpu"  # cpu: the CPU cell (the reference); warp: the batched cell on MuJoCo Warp (docs/gpu.md)
     device: str | None = None  # --backend warp: Warp's device, cuda:0 (default) or cpu
     # held-out shifts NAME:LEVEL, level 0-3 (all:L: every shift; see --list-shifts); --shift given twice adds
@@ -139,8 +147,18 @@ class EvalCommandConfig:
         if self.sweep.run and (self.shift or self.report.dir or self.variant == "all" or self.backend != "cpu"):
             raise ConfigError("--sweep runs its own arms on one variant, on the CPU cell: leave out --shift, --report,"
                               " --variant all and --backend warp")
-        if self.sweep.resume and not (self.sweep.run and self.json):
-            raise ConfigError("--resume continues a sweep from the journal beside its --json: give --sweep and --json")
+        if self.resume and not self.json:
+            raise ConfigError("--resume continues a run from the journal beside its --json: give --json")
+        if not 1 <= self.batch_size <= 1024:
+            raise ConfigError(f"--batch-size {self.batch_size}: give 1 to 1024 cells a worker")
+        if self.batch_size > 1 and self.backend != "cpu":
+            raise ConfigError("--batch-size steps CPU cells in each worker (--backend cpu); with --backend warp, "
+                              "--envs is the number of worlds stepped together")
+        if self.precision not in PRECISIONS:
+            raise ConfigError(f"--precision {self.precision!r}: valid precisions are {list(PRECISIONS)}")
+        if self.precision != "float32" and (self.batch_size == 1 or self.policy in ("expert", "random")):
+            raise ConfigError(f"--precision {self.precision}: a learned policy's batched forward only; give "
+                              "--batch-size 2 or more and a checkpoint")
 
 
 # flags as they were written before the command was its configuration (docs/evaluation.md): both forms work
@@ -149,7 +167,7 @@ SPELLING = Spelling(renamed={"--envs": "--executor.workers", "--executor": "--ex
                              "--report": "--report.dir", "--videos": "--report.videos",
                              "--overwrite": "--report.overwrite=true", "--sweep": "--sweep.run=true",
                              "--sweep-shifts": "--sweep.shifts", "--levels": "--sweep.levels",
-                             "--side-episodes": "--sweep.side_episodes", "--resume": "--sweep.resume=true"})
+                             "--side-episodes": "--sweep.side_episodes"})
 
 
 def parse_args(argv: list[str]) -> EvalCommandConfig:
@@ -194,17 +212,27 @@ def main(argv: list[str] | None = None) -> int:
         evaluation = Evaluation([b.report for b in batched],
                                 {(b.report.variant, seed): video for b in batched for seed, video in b.films.items()})
     else:
-        evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
-                                    cameras=cameras, episode_length=args.episode_length, executor=executor,
-                                    shard_size=args.shard_size, film=film, shift=shift)
+        journal = open_journal(args, cameras, image_size, "evaluation")
+        with interrupted_line(journal):
+            evaluation = run_evaluation(args.policy, names, args.episodes, seed=args.seed, image_size=image_size,
+                                        cameras=cameras, episode_length=args.episode_length, executor=executor,
+                                        shard_size=args.shard_size, film=film, shift=shift,
+                                        batch_size=args.batch_size, precision=args.precision,
+                                        done=journal.done if journal else None,
+                                        on_episode=journal.add if journal else None)
     reports = evaluation.reports
     print(format_report(reports[0]) if args.variant != "all" else f"policy {args.policy}\n" + format_table(reports))
-    found = [asdict(r) for r in reports]
+    if args.backend == "cpu":
+        forward = f"; policy forward in {args.precision}" if args.policy not in ("expert", "random") else ""
+        print(f"cells: {executor.workers} {executor.name} worker(s) x {args.batch_size} stepped together{forward}")
+    found = [{**asdict(r), "batch_size": args.batch_size, "precision": args.precision} for r in reports]
     payload = found if args.variant == "all" else found[0]
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(payload, indent=1))
         print(f"metrics: {args.json}")
+        if args.backend == "cpu":
+            journal_path(args.json).unlink(missing_ok=True)  # the JSON is written: the journal has served
     if report.dir:
         if report.overwrite:
             shutil.rmtree(report.dir, ignore_errors=True)
@@ -234,28 +262,31 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
     """``--sweep``: the control and every shift at every level on the same seeds; prints the table."""
     arms = sweep_arms(args.episodes, args.sweep.side_episodes or args.episodes, args.sweep.levels,
                       args.sweep.shifts or None)
-    journal = None
-    if args.json:  # each finished episode written as it arrives: an interrupted sweep resumes (--resume)
-        journal = SweepJournal(journal_path(args.json), header(args.policy, args.variant, cameras, image_size,
-                                                               args.episode_length), args.sweep.resume)
+    journal = open_journal(args, cameras, image_size, "sweep")
     wanted = {key for a in arms for key in a.keys}
     reused = len(wanted & journal.done.keys()) if journal else 0
     if journal and reused:
         print(f"resuming: {reused} of the {len(wanted)} episodes finished already ({journal.path})")
     start = time.perf_counter()
-    reports = run_sweep(args.policy, args.variant, arms, image_size=image_size, cameras=cameras,
-                        episode_length=args.episode_length, executor=executor, shard_size=args.shard_size,
-                        done=journal.done if journal else None, on_episode=journal.add if journal else None)
+    with interrupted_line(journal):
+        reports = run_sweep(args.policy, args.variant, arms, image_size=image_size, cameras=cameras,
+                            episode_length=args.episode_length, executor=executor, shard_size=args.shard_size,
+                            done=journal.done if journal else None, on_episode=journal.add if journal else None,
+                            batch_size=args.batch_size, precision=args.precision)
     wall = time.perf_counter() - start
     rows = sweep_rows(reports)
     print(format_sweep(args.policy, args.variant, rows))
     resumed = f" (and {reused} from the journal)" if reused else ""
-    print(f"{len(wanted) - reused} episodes in {wall / 60:.1f} min{resumed} ({executor.name}, {executor.workers} envs)")
+    cells = f", {args.batch_size} cells each" if args.batch_size > 1 else ""
+    forward = f"; forward in {args.precision}" if args.policy not in ("expert", "random") else ""
+    print(f"{len(wanted) - reused} episodes in {wall / 60:.1f} min{resumed} ({executor.name}, {executor.workers} envs"
+          f"{cells}{forward})")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         payload = {"policy": args.policy, "variant": args.variant, "seeds": list(SHIFT_SEEDS[: args.episodes]),
                    "command": shlex.join(["colorsort-eval", *argv]), "wall_s": round(wall, 1),
-                   "executor": executor.name, "envs": executor.workers, "machine": machine(),
+                   "executor": executor.name, "envs": executor.workers, "batch_size": args.batch_size,
+                   "precision": args.precision, "machine": machine(),
                    "resumed_episodes": reused,  # taken from the journal; wall_s is the others' time
                    "written": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                    "rows": rows, "reports": [asdict(r) for r in reports]}
@@ -264,6 +295,34 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
         if journal is not None:
             journal.finish()
     return 0
+
+
+def open_journal(args: EvalCommandConfig, cameras: tuple[str, ...], image_size: tuple[int, int],
+                 kind: str) -> SweepJournal | None:
+    """The journal beside ``--json`` (None without it): each finished episode written as it arrives, so an
+    interrupted run resumes (``--resume``); one format for sweeps and plain runs, whose headers differ by ``kind``."""
+    if not args.json:
+        return None
+    head = header(args.policy, args.variant, cameras, image_size, args.episode_length)
+    if kind != "sweep":  # a sweep's header is as it always was: its journals stay resumable
+        head["kind"] = kind
+    if args.precision != "float32":
+        head["precision"] = args.precision
+    journal = SweepJournal(journal_path(args.json), head, args.resume)
+    if journal.done and kind != "sweep":  # a sweep says how many of its own episodes it reuses
+        print(f"resuming: {len(journal.done)} finished episodes in {journal.path}")
+    return journal
+
+
+@contextmanager
+def interrupted_line(journal: SweepJournal | None) -> Iterator[None]:
+    """Ctrl-C (``Interrupted``) said in one line on stderr, with where the finished episodes are, then exit 130."""
+    try:
+        yield
+    except Interrupted as stop:
+        kept = (f"{stop.finished} of {stop.total} episodes kept in {journal.path}; --resume continues" if journal
+                else f"{stop.finished} of {stop.total} episodes finished; none kept (--json keeps each as it ends)")
+        raise Interrupted(stop.finished, stop.total, kept) from None
 
 
 def variant_names(policy: str, variant: str) -> list[str]:

@@ -1,7 +1,8 @@
 """How every console script ends on an error: one message line on stderr and ``colorsort.errors.exit_code``'s status.
 
 ``prog: error: MESSAGE`` for bad input (status 2: nothing was done, nothing overwritten), ``prog: MESSAGE`` for
-work that failed (status 1), ``prog: interrupted`` for Ctrl-C (130). argparse's own usage errors stay argparse's.
+work that failed (status 1), ``prog: interrupted`` for Ctrl-C (130; ``prog: interrupted: N of M episodes kept in
+...`` where a run kept what it finished). argparse's own usage errors stay argparse's.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import sys
 from collections.abc import Callable
 from typing import Protocol
 
-from colorsort.errors import INTERRUPTED, USAGE, ColorSortError, exit_code
+from colorsort.errors import INTERRUPTED, USAGE, ColorSortError, Interrupted, exit_code
 
 
 class Main(Protocol):
@@ -28,6 +29,9 @@ def guarded(prog: str) -> Callable[[Main], Main]:
         def run(argv: list[str] | None = None) -> int:
             try:
                 return main(argv)
+            except Interrupted as stop:  # a run that kept what it finished says so
+                print(f"{prog}: {stop}", file=sys.stderr)
+                return INTERRUPTED
             except KeyboardInterrupt:
                 print(f"{prog}: interrupted", file=sys.stderr)
                 return INTERRUPTED
