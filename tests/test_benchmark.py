@@ -176,7 +176,8 @@ def test_eval_cli_writes_the_json(tmp_path, capsys):
 
 
 def test_eval_takes_a_checkpoints_cameras_unless_told_and_refuses_others(tmp_path):
-    """colorsort-eval --policy PATH renders what the checkpoint was trained on; other cameras or sizes are refused."""
+    """colorsort-eval --policy PATH renders what the checkpoint was trained on; other cameras or sizes are refused.
+    The expert and random render no camera for the policy unless told (the expert takes its own sensor photos)."""
     from colorsort.benchmark.evaluate import observation_settings
 
     def checkpoint(name, inputs):
@@ -192,10 +193,9 @@ def test_eval_takes_a_checkpoints_cameras_unless_told_and_refuses_others(tmp_pat
     assert observation_settings(state_only, None, None) == ((), (128, 128))
     assert observation_settings(state_only, "none", None) == ((), (128, 128))
     assert observation_settings(vision, None, None) == (("wrist",), (96, 96))
-    assert observation_settings("expert", None, None) == (("scene", "wrist"), (128, 128))
+    assert observation_settings("expert", None, None) == ((), (128, 128))  # it takes its own photos
+    assert observation_settings("random", None, None) == ((), (128, 128))
     assert observation_settings("expert", "sensor", 64) == (("sensor",), (64, 64))
-    with pytest.raises(ValueError, match="the expert reads the sensor camera"):
-        observation_settings("expert", "none", None)
     with pytest.raises(ValueError, match="trained on cameras"):
         observation_settings(state_only, "scene,wrist", None)
     with pytest.raises(ValueError, match="96x96"):

@@ -60,13 +60,14 @@ class CpuCells:
         cameras, image_size: what each env renders for the policy (``ColorSortGymEnv``'s).
         episode_length: steps before an episode is truncated (None: the variant's time limit).
         film: film each episode (``filming.EpisodeFilm``): its mp4 bytes in its result's ``video``.
+        render: give each env a GL context even without cameras (the expert takes its own photos).
     """
 
     def __init__(self, variant: Variant, worlds: int, cameras: tuple[str, ...], image_size: tuple[int, int],
-                 episode_length: int | None = None, film: bool = False):
+                 episode_length: int | None = None, film: bool = False, render: bool = False):
         self.worlds, self.film = worlds, film
         self.envs = [ColorSortGymEnv(variant, cameras=cameras, image_size=image_size, episode_length=episode_length,
-                                     render_mode="rgb_array" if film else None) for _ in range(worlds)]
+                                     render_mode="rgb_array" if film or render else None) for _ in range(worlds)]
         self.max_steps = self.envs[0].max_episode_steps
         self.task = self.envs[0].task_description
         self.obs: list[dict[str, Any]] = [{} for _ in range(worlds)]

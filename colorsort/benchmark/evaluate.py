@@ -24,7 +24,7 @@ from colorsort.benchmark.lockstep import BatchedPolicy, Episode, LockstepPolicy,
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.benchmark.sweep_journal import Key
-from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
+from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.envs.rollout import GymEpisode, Observer, rollout
 from colorsort.errors import ConfigError, Interrupted, StageError
@@ -90,6 +90,12 @@ def policy_threads(spec: str) -> Iterator[None]:
         torch.set_num_threads(before)
 
 
+def renders(settings: EvalConfig) -> bool:
+    """Whether an episode's env needs a GL context beyond its policy's cameras: to film, or for the expert's own
+    photos (``expert.calibration.sensor_source``)."""
+    return settings.film or settings.policy == "expert"
+
+
 class EpisodeRunner:
     """One env and one policy, built once per process, running episodes by seed (``--batch-size 1``)."""
 
@@ -100,8 +106,7 @@ class EpisodeRunner:
         self.film = settings.film
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
                                    image_size=settings.image_size, episode_length=settings.episode_length,
-                                   render_mode="rgb_array" if settings.film else None,  # a GL context to film with
-                                   shift=settings.shift)
+                                   render_mode="rgb_array" if renders(settings) else None, shift=settings.shift)
 
     def close(self) -> None:
         """Close the env; give this process back the torch threads it had (it may be the caller's)."""
@@ -186,7 +191,7 @@ def run_lockstep_job(job: EvalJob, ctx: TaskContext) -> int:
     variant = get_variant(s.variant)
     worlds = min(s.batch_size, len(job.episodes))
     with policy_threads(s.policy):
-        cells = CpuCells(variant, worlds, s.cameras, s.image_size, s.episode_length, s.film)
+        cells = CpuCells(variant, worlds, s.cameras, s.image_size, s.episode_length, s.film, renders(s))
         try:
             policy: LockstepPolicy
             if s.policy in ("expert", "random"):
@@ -340,7 +345,8 @@ def evaluate(policy_spec: str, variant_name: str, episodes: int, *, seed: int | 
 def observation_settings(policy_spec: str, cameras: str | None,
                          image_size: int | None) -> tuple[tuple[str, ...], tuple[int, int]]:
     """The cameras and (height, width) [px] to render for a policy: as given, else as a checkpoint was
-    trained (its ``config.json``), else scene and wrist at 128 px.
+    trained (its ``config.json``), else none for the expert and ``random`` (the expert takes its own photo
+    through the sensor camera when the ray fires, ``expert.calibration.sensor_source``; ``random`` reads nothing).
 
     Raises:
         ValueError: an unknown policy, or cameras/size other than those the checkpoint takes.
@@ -348,11 +354,8 @@ def observation_settings(policy_spec: str, cameras: str | None,
     check_policy_spec(policy_spec)
     given = parse_cameras(cameras) if cameras is not None else None
     size = (image_size, image_size) if image_size is not None else None
-    if policy_spec == "expert" and given == ():
-        raise ConfigError("the expert reads the sensor camera, which --cameras none leaves unrendered: give "
-                          f"cameras (any of {list(CAMERAS)}), or leave --cameras out")
     if policy_spec in ("expert", "random"):
-        return (given if given is not None else DEFAULT_CAMERAS), size or DEFAULT_IMAGE_SIZE
+        return (given if given is not None else ()), size or DEFAULT_IMAGE_SIZE
     trained, trained_size = checkpoint_cameras(policy_spec)
     if given is not None and set(given) != set(trained):
         raise ConfigError(f"{policy_spec} was trained on cameras {list(trained) or 'none'}; got --cameras {cameras}")

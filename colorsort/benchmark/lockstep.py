@@ -150,10 +150,8 @@ class BatchedPolicy:
             self.cameras, self.image_size = checkpoint_cameras(spec)
             from colorsort.benchmark.policies import LeRobotPolicy
 
-            loaded = LeRobotPolicy(spec, device=str(self.device))
+            loaded = LeRobotPolicy(spec, device=str(self.device))  # in channels-last order where it has cameras
             self.policy = loaded.policy
-            if self.cameras:
-                self.policy.to(memory_format=torch.channels_last)
             self.preprocessor, self.postprocessor = loaded.preprocessor, loaded.postprocessor
             self.restart_period = restart_period(self.policy.config)
 

@@ -72,7 +72,10 @@ class RandomPolicy:
 
 
 class LeRobotPolicy:
-    """A LeRobot checkpoint (``pretrained_model`` folder with its config, weights and processors), on the CPU."""
+    """A LeRobot checkpoint (``pretrained_model`` folder with its config, weights and processors), on the CPU.
+
+    Its convolutions run in channels-last memory order (1.8x faster for ``act-camera-tracking``'s forward at batch
+    1 on these CPUs, ``benchmarks/bench_forward.py``), under ``torch.inference_mode``."""
 
     def __init__(self, path: str | Path, device: str = "cpu"):
         from lerobot.configs.policies import PreTrainedConfig
@@ -88,6 +91,11 @@ class LeRobotPolicy:
         with contextlib.redirect_stdout(io.StringIO()):  # LeRobot prints "Loading weights from local directory"
             self.policy = get_policy_class(config.type).from_pretrained(path, config=config)
         self.policy.eval()
+        self.channels_last = any(k.startswith("observation.image") for k in config.input_features)
+        if self.channels_last:
+            import torch
+
+            self.policy.to(memory_format=torch.channels_last)
         skip_unchanged_mode_switches(self.policy)
         self.preprocessor, self.postprocessor = make_pre_post_processors(
             policy_cfg=config, pretrained_path=str(path),
@@ -105,8 +113,10 @@ class LeRobotPolicy:
         from lerobot.envs.utils import preprocess_observation
 
         batch = preprocess_observation(obs)
+        if self.channels_last:
+            batch = {k: v.contiguous(memory_format=torch.channels_last) if v.ndim == 4 else v for k, v in batch.items()}
         batch["task"] = [self.task]
-        with torch.no_grad():
+        with torch.inference_mode():
             action = self.postprocessor(self.policy.select_action(self.preprocessor(batch)))
         return action.to("cpu").numpy()[0].astype(np.float32)
 
