@@ -90,8 +90,10 @@ def bench_lerobot(policy: str, variant: str, episodes: int, sizes: list[int], re
                 if size is not None:
                     argv.append(f"--env.image_size={size[0]}")
                 start = time.perf_counter()
-                subprocess.run(argv, check=True, capture_output=True)
+                done = subprocess.run(argv, capture_output=True, text=True)
                 seconds[n].append(time.perf_counter() - start)
+                if done.returncode != 0:
+                    raise RuntimeError(f"{' '.join(argv)} exited {done.returncode}:\n{done.stderr[-3000:]}")
     print(f"lerobot-eval, the same policy and variant, {episodes} episodes (its asynchronous vector env):")
     for n, times in seconds.items():
         ratios = [a / b for a, b in zip(seconds[1], times, strict=True)]

@@ -3,8 +3,8 @@
     python benchmarks/bench_forward.py [--policies baselines/act-camera-tracking,baselines/act-camera]
                                        [--batch-sizes 1,8] [--repeats 12] [--threads 1]
 
-For each checkpoint, times one action-chunk prediction (``predict_action_chunk``: ACT's whole forward, Diffusion
-Policy's denoising loop) on random observations of its own shapes, under ``torch.inference_mode``, at each batch
+For each checkpoint, times one action-chunk prediction (``select_action`` on a just-reset policy: ACT's whole
+forward, Diffusion Policy's denoising loop) on random observations of its own shapes, under ``torch.inference_mode``, at each batch
 size: images in contiguous (N, 3, H, W) order as LeRobot's ``preprocess_observation`` gives them, in channels-last
 order (``colorsort-eval``'s), and channels-last under bfloat16 CPU autocast (``--precision bfloat16``). Prints the
 minimum over ``--repeats`` (the machine is shared: the least-disturbed run), the time per observation, and each
@@ -47,10 +47,11 @@ def forward_ms(policy: LeRobotPolicy, batch: dict, bf16: bool, repeats: int) -> 
     torch.manual_seed(0)
     best = float("inf")
     for _ in range(repeats):
+        policy.policy.reset()  # an empty queue: the next select_action predicts a chunk
         autocast = torch.autocast("cpu", dtype=torch.bfloat16) if bf16 else contextlib.nullcontext()
         start = time.perf_counter()
         with torch.inference_mode(), autocast:
-            policy.policy.predict_action_chunk(batch)
+            policy.policy.select_action(batch)
         best = min(best, time.perf_counter() - start)
     return 1000 * best
 

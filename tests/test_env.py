@@ -139,3 +139,35 @@ def test_close_frees_the_gl_context_at_once_without_a_full_collection(monkeypatc
     env.close()
     assert context() is None and env.sim is None and not collections
     env.close()  # a second close does nothing
+
+
+@pytest.mark.parametrize("robot", ["IRB140", "Panda"])
+def test_the_servo_between_policy_steps_writes_what_robosuites_controller_writes(robot, make_env):
+    """``envs/servo.py``: between policy steps the arm's torques come from robosuite's joint-position law alone,
+    without its bookkeeping. Every servo update of a sorting episode writes exactly the ``ctrl`` robosuite's own
+    ``Robot.control`` writes from the same state, so the episode is the same bit for bit."""
+    from colorsort.expert.factory import make_expert
+
+    env = make_env(robot, seed=3, has_offscreen_renderer=True)
+    obs = env.reset()
+    expert = make_expert(env)
+    expert.reset(obs)
+    obs, _, _, _ = env.step(expert.act(obs))
+    assert env._servo.fast  # this controller's law is the servo's: it would run between policy steps
+    env._servo.fast = False  # robosuite's control at every update, each compared with the servo's
+    robosuite_control, checked = env.robots[0].control, []
+
+    def compared(action, policy_step=False):
+        before = env.sim.data.ctrl.copy()
+        robosuite_control(action, policy_step=policy_step)
+        wanted = env.sim.data.ctrl.copy()
+        if not policy_step:
+            env.sim.data.ctrl[:] = before
+            env._servo.hold(env.robots[0].part_controllers[env.robots[0].arms[0]])
+            assert np.array_equal(env.sim.data.ctrl, wanted)  # bit for bit
+            checked.append(True)
+
+    env.robots[0].control = compared
+    for _ in range(200):  # the approach and the first pick
+        obs, _, _, _ = env.step(expert.act(obs))
+    assert len(checked) == 200 * 4  # 5 updates a policy step at 100 Hz, the first robosuite's own

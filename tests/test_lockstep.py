@@ -29,8 +29,8 @@ def per_episode(path: Path) -> list[dict]:
 
 @pytest.mark.slow
 def test_batch_sizes_1_2_and_5_give_the_expert_the_same_episodes_and_json(tmp_path):
-    """The expert plans from its own cell: each seed's episode is exactly the same at any batch size, and so is the
-    JSON (but for the batch size it names)."""
+    """The expert has no forward to share (its episodes run on one env whatever the batch size): each seed's
+    episode is exactly the same at any batch size, and so is the JSON (but for the batch size it names)."""
     runs = {}
     for n in (1, 2, 5):
         out = tmp_path / f"b{n}.json"
@@ -95,9 +95,6 @@ class NullPolicy:
     name, restart_period = "null", 4
 
     def reset(self, seed):
-        pass
-
-    def begin(self, worlds, episodes, cells):
         pass
 
     def act(self, obs, task, active):

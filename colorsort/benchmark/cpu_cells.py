@@ -2,9 +2,8 @@
 
 Each world is a ``ColorSortGymEnv`` of its own, built once and reused episode after episode (an episode starts from
 its seed and shifts alone, ``lockstep.Episode``); a step steps the active ones in turn. What the batch buys is the
-policy: one forward over N observations costs far less than N forwards (``benchmarks/bench_eval.py``). The expert
-and ``random`` keep a policy per world (``WorldPolicies``), so each world's episode is exactly the one a lone env
-gives. An episode's result is ``cpu_episode_result``'s, the one ``evaluate.EpisodeRunner`` writes.
+policy: one forward over N observations costs far less than N forwards (``benchmarks/bench_forward.py``). An
+episode's result is ``cpu_episode_result``'s, the one ``evaluate.EpisodeRunner`` writes.
 """
 
 from __future__ import annotations
@@ -17,11 +16,9 @@ import numpy as np
 
 from colorsort.benchmark.episode_result import EpisodeResult, box_record
 from colorsort.benchmark.filming import EpisodeFilm
-from colorsort.benchmark.lockstep import Cells, Episode
-from colorsort.benchmark.policies import Policy, make_policy
+from colorsort.benchmark.lockstep import Episode
 from colorsort.cell.plant import Grip
 from colorsort.envs.gym_env import ColorSortGymEnv
-from colorsort.errors import ConfigError
 from colorsort.variants import Variant
 
 
@@ -60,14 +57,13 @@ class CpuCells:
         cameras, image_size: what each env renders for the policy (``ColorSortGymEnv``'s).
         episode_length: steps before an episode is truncated (None: the variant's time limit).
         film: film each episode (``filming.EpisodeFilm``): its mp4 bytes in its result's ``video``.
-        render: give each env a GL context even without cameras (the expert takes its own photos).
     """
 
     def __init__(self, variant: Variant, worlds: int, cameras: tuple[str, ...], image_size: tuple[int, int],
-                 episode_length: int | None = None, film: bool = False, render: bool = False):
+                 episode_length: int | None = None, film: bool = False):
         self.worlds, self.film = worlds, film
         self.envs = [ColorSortGymEnv(variant, cameras=cameras, image_size=image_size, episode_length=episode_length,
-                                     render_mode="rgb_array" if film or render else None) for _ in range(worlds)]
+                                     render_mode="rgb_array" if film else None) for _ in range(worlds)]
         self.max_steps = self.envs[0].max_episode_steps
         self.task = self.envs[0].task_description
         self.obs: list[dict[str, Any]] = [{} for _ in range(worlds)]
@@ -75,7 +71,6 @@ class CpuCells:
         self._ended = np.zeros(worlds, bool)
         self.films: list[EpisodeFilm | None] = [None] * worlds
         self._fresh: set[int] = set()  # worlds whose film lacks its first frame
-        self.phase: Any = None  # world -> the policy's phase, for the films' overlay (``WorldPolicies.phase``)
 
     def reset(self, episodes: Sequence[Episode], worlds: np.ndarray) -> CpuObservations:
         for w, e in zip(worlds, episodes, strict=True):
@@ -93,7 +88,7 @@ class CpuCells:
     def step(self, actions: Any, active: np.ndarray) -> CpuObservations:
         actions = np.asarray(actions.cpu() if hasattr(actions, "cpu") else actions, np.float32)
         for w in np.flatnonzero(active):
-            if w in self._fresh:  # the reset's frame, filmed once the policy began the episode (its phase shows)
+            if w in self._fresh:  # the reset's frame
                 self._add_frame(int(w))
                 self._fresh.discard(int(w))
             self.obs[w], _, terminated, truncated, _ = self.envs[w].step(actions[w])
@@ -124,7 +119,7 @@ class CpuCells:
     def _add_frame(self, w: int) -> None:
         film = self.films[w]
         if film is not None:
-            film.add(self.phase(w) if self.phase is not None else None)
+            film.add()
 
     def _discard(self, w: int) -> None:
         film = self.films[w]
@@ -145,36 +140,3 @@ class CpuCells:
         return CpuObservations(torch.from_numpy(np.stack([o["agent_pos"] for o in rows]).astype(np.float32)),
                                torch.from_numpy(np.stack([o["environment_state"] for o in rows]).astype(np.float32)),
                                images)
-
-
-class WorldPolicies:
-    """The expert or ``random``, one per world (``lockstep.LockstepPolicy``): each world's episode is exactly the
-    one a lone env gives (the expert plans from its own env; ``random`` draws from its episode's seed)."""
-
-    restart_period: int | None = 1
-
-    def __init__(self, spec: str, worlds: int):
-        self.name = spec
-        self.policies: list[Policy] = [make_policy(spec) for _ in range(worlds)]
-        self.cells: CpuCells | None = None
-
-    def reset(self, seed: int) -> None:
-        """Nothing: each world's policy is reset as its episode begins."""
-
-    def begin(self, worlds: np.ndarray, episodes: Sequence[Episode], cells: Cells) -> None:
-        if not isinstance(cells, CpuCells):
-            raise ConfigError(f"{self.name} runs on the CPU cells (--backend cpu)")
-        self.cells, cells.phase = cells, self.phase
-        for w, e in zip(worlds, episodes, strict=True):
-            self.policies[w].reset(cells.envs[w], e.seed)
-
-    def act(self, obs: Any, task: str, active: np.ndarray) -> np.ndarray:
-        assert self.cells is not None, "begin() comes first"
-        actions = np.zeros((len(self.policies), self.cells.envs[0].action_space.shape[0]), np.float32)
-        for w in np.flatnonzero(active):
-            actions[w] = self.policies[w].act(self.cells.obs[w])
-        return actions
-
-    def phase(self, world: int) -> str | None:
-        """World ``world``'s expert phase now (None for ``random``)."""
-        return getattr(self.policies[world], "phase", None)

@@ -17,10 +17,10 @@ from typing import Any
 
 from tqdm import tqdm
 
-from colorsort.benchmark.cpu_cells import CpuCells, WorldPolicies, cpu_episode_result
+from colorsort.benchmark.cpu_cells import CpuCells, cpu_episode_result
 from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.filming import EpisodeFilm
-from colorsort.benchmark.lockstep import BatchedPolicy, Episode, LockstepPolicy, run_rolling, run_waves
+from colorsort.benchmark.lockstep import BatchedPolicy, Episode, run_rolling, run_waves
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.benchmark.sweep_journal import Key
@@ -168,7 +168,7 @@ def run_job(job: EvalJob, ctx: TaskContext) -> int:
     they arrive); on a stop (Ctrl-C) it starts no more. Returns how many it finished. ``batch_size`` 1: one env
     and one policy, an episode at a time; more: ``batch_size`` cells stepped together, one policy forward a step
     (``lockstep.py``)."""
-    if job.settings.batch_size > 1:
+    if job.settings.batch_size > 1 and job.settings.policy not in ("expert", "random"):
         return run_lockstep_job(job, ctx)
     runner = EpisodeRunner(job.settings)
     results = []
@@ -191,14 +191,10 @@ def run_lockstep_job(job: EvalJob, ctx: TaskContext) -> int:
     variant = get_variant(s.variant)
     worlds = min(s.batch_size, len(job.episodes))
     with policy_threads(s.policy):
-        cells = CpuCells(variant, worlds, s.cameras, s.image_size, s.episode_length, s.film, renders(s))
+        cells = CpuCells(variant, worlds, s.cameras, s.image_size, s.episode_length, s.film)
         try:
-            policy: LockstepPolicy
-            if s.policy in ("expert", "random"):
-                policy = WorldPolicies(s.policy, worlds)
-            else:
-                low, high = cells.envs[0].action_space.low, cells.envs[0].action_space.high
-                policy = BatchedPolicy(s.policy, "cpu", low, high, s.precision)
+            low, high = cells.envs[0].action_space.low, cells.envs[0].action_space.high
+            policy = BatchedPolicy(s.policy, "cpu", low, high, s.precision)
 
             def sent(k: int, result: EpisodeResult) -> None:
                 ctx.send((s.variant, job.episodes[k].shift, result))

@@ -6,9 +6,8 @@ the policy acts on every world's observation at once (``BatchedPolicy``: one for
 the batch). Two ways to fill the worlds:
 
 - rolling (``run_rolling``), for policies whose only state is a queue of actions refilled for every world at once
-  (LeRobot's ACT, and Diffusion Policy on one observation; ``restart_period``), and for policies with a state per
-  world (the expert): a world whose episode ended starts the next episode at the policy's next restart point while
-  the others run on, so a slow episode holds up no other;
+  (LeRobot's ACT, and Diffusion Policy on one observation; ``restart_period``): a world whose episode ended starts
+  the next episode at the policy's next restart point while the others run on, so a slow episode holds up no other;
 - waves (``run_waves``), as LeRobot's ``lerobot-eval`` runs a vector env, for any other policy and for the batched
   cell's films: N worlds start together, the policy is reset once a wave, and a world whose episode ended waits
   for its wave to end (the batched cell steps it on; nothing after its end counts).
@@ -93,10 +92,6 @@ class LockstepPolicy(Protocol):
         """Before a run or a wave: its generator from ``seed``, its queues emptied."""
         ...
 
-    def begin(self, worlds: np.ndarray, episodes: Sequence[Episode], cells: Cells) -> None:
-        """``worlds`` start ``episodes`` (a policy with a state per world resets theirs)."""
-        ...
-
     def act(self, obs: Observations, task: str, active: np.ndarray) -> Any:
         """(N, action size) actions; rows of inactive worlds are not taken."""
         ...
@@ -163,9 +158,6 @@ class BatchedPolicy:
         if self.policy is not None:
             self.policy.reset()
 
-    def begin(self, worlds: np.ndarray, episodes: Sequence[Episode], cells: Cells) -> None:
-        """Nothing: the policy's queue is shared by every world (``restart_period``)."""
-
     def act(self, obs: Observations, task: str, active: np.ndarray | None = None) -> Any:
         """Actions (N, action size) for every world's observation."""
         import torch
@@ -219,7 +211,6 @@ def run_waves(cells: Cells, policy: LockstepPolicy, episodes: Sequence[Episode],
         worlds = np.arange(len(wave))
         obs = cells.reset(wave, worlds)
         policy.reset(wave[0].seed)
-        policy.begin(worlds, wave, cells)
         if film is not None:
             film.start()
             film.add()
@@ -269,7 +260,6 @@ def run_rolling(cells: Cells, policy: LockstepPolicy, episodes: Sequence[Episode
             free = np.flatnonzero(~active)[: len(episodes) - upcoming]
             started = list(episodes[upcoming : upcoming + len(free)])
             obs = cells.reset(started, free)
-            policy.begin(free, started, cells)
             episode[free] = np.arange(upcoming, upcoming + len(free))
             start[free], active[free] = t, True
             upcoming += len(free)

@@ -32,6 +32,7 @@ from colorsort.cell.rendering import check_gl
 from colorsort.cell.sim_state import CellState, SimStateLayout, rng_from_words, rng_to_words
 from colorsort.cell.suction import add_welds
 from colorsort.config import CellLayout, Lighting, TaskConfig, layout_for, make_config
+from colorsort.envs.servo import Servo
 from colorsort.errors import ConfigError, checked_action
 from colorsort.paths import asset_path
 from colorsort.robots import GRIPPERS, ROBOTS, RobotSpec
@@ -128,8 +129,7 @@ class ColorSort(ManipulationEnv):
             camera_widths=camera_widths, camera_depths=camera_depths, camera_segmentations=camera_segmentations,
             renderer=renderer, renderer_config=renderer_config, seed=seed,
         )
-        # robosuite hides its visualisation sites (the gripper's green grip line) in reset(), not when
-        # it builds the env: an env rendered before its first reset (a replay) would show them.
+        # robosuite hides its visualisation sites in reset(): an env rendered before its first reset would show them
         self.visualize(vis_settings={vis: False for vis in self._visualizations})
 
     def _load_model(self) -> None:
@@ -149,6 +149,7 @@ class ColorSort(ManipulationEnv):
 
     def _setup_references(self) -> None:
         super()._setup_references()  # robosuite calls this on every reset: the plant lives as long as its model
+        self._servo = Servo(self.robots[0])
         if getattr(self, "plant", None) is None or self.plant.model is not self.mj_model:
             gripper = self.robots[0].gripper["right"]
             self.plant = Plant(self.mj_model, self.mj_data, self.layout, self.config, cup=gripper.correct_naming("cup"),
@@ -178,9 +179,8 @@ class ColorSort(ManipulationEnv):
         return self.plant.pool.pos(box)
 
     def put_box(self, color: str, x: float, y: float, yaw: float = 0.0) -> Box:
-        """Take a box from the pool and set it down on the belt, centred at (x, y) [m], turned ``yaw`` [rad]
-        (for tests and benchmarks; the spawner does this in play). ValueError: unknown colour;
-        RuntimeError: the pool is empty."""
+        """Set a box from the pool down on the belt at (x, y) [m], turned ``yaw`` [rad] (tests, benchmarks; the
+        spawner does this in play). ValueError: unknown colour; RuntimeError: the pool is empty."""
         box = self.plant.put_box(color, x, y, yaw)
         self.sim.forward()
         return box
@@ -314,8 +314,8 @@ class ColorSort(ManipulationEnv):
             self._substep = 0
             self._arm_action = action[:-1]
             self.plant.belt.belt_pass = bool(action[-1] > 0.0)
-        if self._substep % self._servo_period == 0:
-            self.robots[0].control(self._arm_action, policy_step=policy_step)  # robosuite's controller writes ctrl
+        if self._substep % self._servo_period == 0:  # robosuite's controller, or between policy steps its torque law
+            self._servo.control(self._arm_action, policy_step)  # writes ctrl (servo.py)
         self._substep += 1
         self.plant.physics_step()
 

@@ -1,0 +1,65 @@
+"""The arm's joint servo between policy steps: robosuite's joint-position torque law, without its bookkeeping.
+
+robosuite's ``Robot.control`` runs at every servo update (every ``servo_period`` physics steps): it refreshes the
+controller's state (the reference site's pose, velocity and Jacobians, which a joint-position law never reads),
+splits the action among the parts, runs each part's controller and records what a policy step did. Between policy
+steps the goal is fixed and only the arm's torques change, so ``Servo.hold`` computes just those, with the same
+numpy operations in the same order on the same MuJoCo quantities (``mj_step1`` has computed them), and writes the
+same ``ctrl``: bit for bit what robosuite writes (``tests/test_env.py``), at a fraction of the time
+(``benchmarks/bench_env.py``). A policy step still runs robosuite's own ``control``, which sets the goal and the
+records; the gripper's command, a function of that goal alone, stays as robosuite wrote it. Any other controller
+runs robosuite's ``control`` at every update.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mujoco
+import numpy as np
+
+
+class Servo:
+    """The arm's servo update: ``control(action, policy_step)`` writes ``ctrl`` as robosuite's ``Robot.control``
+    would, running robosuite's own at policy steps and for a controller ``hold`` does not reproduce."""
+
+    def __init__(self, robot: Any):
+        self.robot = robot  # its controllers are built after the model's references: read at the first update
+        self.fast: bool | None = None
+
+    def _setup(self) -> None:
+        from robosuite.controllers.parts.generic.joint_pos import JointPositionController
+
+        robot = self.robot
+        self.arm = robot.arms[0]
+        c = robot.part_controllers[self.arm]
+        self.fast = (isinstance(c, JointPositionController) and c.impedance_mode == "fixed" and c.interpolator is None
+                     and c.use_torque_compensation and len(robot.arms) == 1)
+        model = robot.sim.model._model
+        self.actuators = np.asarray(robot._ref_actuators_indexes_dict[self.arm])
+        self.low, self.high = model.actuator_ctrlrange[self.actuators, 0], model.actuator_ctrlrange[self.actuators, 1]
+        self.full: np.ndarray = np.zeros((model.nv, model.nv))  # the full mass matrix, as robosuite takes it
+
+    def control(self, action: np.ndarray, policy_step: bool) -> None:
+        """One servo update for the arm ``action`` (joint targets [rad], then the gripper's command)."""
+        if self.fast is None:
+            self._setup()
+        c = self.robot.part_controllers[self.arm]  # robosuite may build new controllers at a reset
+        if policy_step or not self.fast or c.goal_qpos is None:
+            self.robot.control(action, policy_step=policy_step)
+        else:
+            self.hold(c)
+
+    def hold(self, c: Any) -> None:
+        """Write the arm's ``ctrl`` for controller ``c``'s goal from the state ``mj_step1`` left, with robosuite's
+        operations (``JointPositionController.update`` and ``run_controller``, ``Robot.control``'s clip)."""
+        sim = self.robot.sim
+        model, data = sim.model._model, sim.data._data
+        joint_pos = np.array(data.qpos[c.qpos_index])
+        joint_vel = np.array(data.qvel[c.qvel_index])
+        mujoco.mj_fullM(model, self.full, data.qM)
+        mass_matrix = self.full[c.qvel_index, :][:, c.qvel_index]
+        position_error = np.array(c.goal_qpos) - joint_pos
+        desired_torque = np.multiply(np.array(position_error), np.array(c.kp)) + np.multiply(-joint_vel, c.kd)
+        torques = np.dot(mass_matrix, desired_torque) + data.qfrc_bias[c.qvel_index]
+        data.ctrl[self.actuators] = np.clip(torques, self.low, self.high)
