@@ -4,11 +4,12 @@
                                        [--batch-sizes 1,8] [--repeats 12] [--threads 1]
 
 For each checkpoint, times one action-chunk prediction (``select_action`` on a just-reset policy: ACT's whole
-forward, Diffusion Policy's denoising loop) on random observations of its own shapes, under ``torch.inference_mode``, at each batch
-size: images in contiguous (N, 3, H, W) order as LeRobot's ``preprocess_observation`` gives them, in channels-last
-order (``colorsort-eval``'s), and channels-last under bfloat16 CPU autocast (``--precision bfloat16``). Prints the
-minimum over ``--repeats`` (the machine is shared: the least-disturbed run), the time per observation, and each
-setting's speed-up over the contiguous float32 forward at batch 1. ``--threads``: torch threads, as each
+forward, Diffusion Policy's denoising loop) on random observations of its own shapes, under
+``torch.inference_mode``, at each batch size: images in contiguous (N, 3, H, W) order as LeRobot's
+``preprocess_observation`` gives them, in channels-last order (``colorsort-eval``'s), and channels-last under
+bfloat16 CPU autocast (``--precision bfloat16``). Prints the minimum over ``--repeats`` (the machine is shared:
+the least-disturbed run), the time per observation, and each setting's speed-up over the contiguous float32
+forward at batch 1. ``--threads``: torch threads, as each
 ``colorsort-eval`` worker sets them (1).
 """
 

@@ -143,9 +143,9 @@ def test_close_frees_the_gl_context_at_once_without_a_full_collection(monkeypatc
 
 @pytest.mark.parametrize("robot", ["IRB140", "Panda"])
 def test_the_servo_between_policy_steps_writes_what_robosuites_controller_writes(robot, make_env):
-    """``envs/servo.py``: between policy steps the arm's torques come from robosuite's joint-position law alone,
-    without its bookkeeping. Every servo update of a sorting episode writes exactly the ``ctrl`` robosuite's own
-    ``Robot.control`` writes from the same state, so the episode is the same bit for bit."""
+    """``envs/servo.py``: the arm's torques come from robosuite's controllers without its bookkeeping (between
+    policy steps its joint-position law alone). Every servo update of a sorting episode, policy steps included,
+    writes exactly the ``ctrl`` robosuite's own ``Robot.control`` writes from the same state."""
     from colorsort.expert.factory import make_expert
 
     env = make_env(robot, seed=3, has_offscreen_renderer=True)
@@ -161,13 +161,15 @@ def test_the_servo_between_policy_steps_writes_what_robosuites_controller_writes
         before = env.sim.data.ctrl.copy()
         robosuite_control(action, policy_step=policy_step)
         wanted = env.sim.data.ctrl.copy()
-        if not policy_step:
-            env.sim.data.ctrl[:] = before
+        env.sim.data.ctrl[:] = before
+        if policy_step:
+            env._servo.new_goal(action)
+        else:
             env._servo.hold(env.robots[0].part_controllers[env.robots[0].arms[0]])
-            assert np.array_equal(env.sim.data.ctrl, wanted)  # bit for bit
-            checked.append(True)
+        assert np.array_equal(env.sim.data.ctrl, wanted)  # bit for bit
+        checked.append(policy_step)
 
     env.robots[0].control = compared
     for _ in range(200):  # the approach and the first pick
         obs, _, _, _ = env.step(expert.act(obs))
-    assert len(checked) == 200 * 4  # 5 updates a policy step at 100 Hz, the first robosuite's own
+    assert checked.count(False) == 200 * 4 and checked.count(True) == 200  # 5 updates a policy step at 100 Hz

@@ -11,6 +11,7 @@ Example::
     colorsort-eval --policy baselines/act-camera-snapshot --variant default --shift camera-pose:2 --episodes 50
     colorsort-eval --list-shifts
     colorsort-eval --policy expert --variant default --sweep --episodes 50 --side-episodes 20 --json outputs/sweep.json
+    colorsort-eval --policy baselines/act-camera-tracking --variant tracking --episodes 50 --envs 2 --batch-size 8
 
 Episode ``k`` runs with the variant's ``k``-th evaluation seed (or ``--seed S`` + k), so the same
 command gives the same numbers, whatever ``--envs`` (episodes run at once), ``--executor`` (local
@@ -35,9 +36,12 @@ cell's renderer (docs/gpu.md).
 (docs/shifts.md) on the shift evaluation seeds (30000 on); the printout, ``--json`` and ``--report`` name the
 shift, and each episode's record holds the values drawn for it. ``--sweep`` runs the control and every shift at
 every level on the same seeds (``--episodes`` for the control and level 2, ``--side-episodes`` for levels 1 and 3)
-and prints one table (``--json``: every arm's report and the table's rows); with ``--json`` each finished episode
-is written to ``<json>.partial.jsonl`` as it arrives, and ``--resume`` runs only the episodes it lacks.
-Exit status 0 when it ran, 1 when it failed or was interrupted, 2 for bad arguments.
+and prints one table (``--json``: every arm's report and the table's rows).
+``--batch-size N`` steps N cells in each worker together, one batched forward of a checkpoint a control step
+(``benchmark/lockstep.py``; docs/benchmark.md); the same episodes up to a forward's rounding.
+With ``--json``, each finished episode (of a run or a sweep) is written to ``<json>.partial.jsonl`` as it arrives;
+Ctrl-C stops within about one episode and says how many it kept, and ``--resume`` runs only the episodes it lacks.
+Exit status 0 when it ran, 1 when it failed, 2 for bad arguments, 130 when interrupted.
 """
 
 from __future__ import annotations
@@ -161,7 +165,7 @@ class EvalCommandConfig:
                               "--batch-size 2 or more and a checkpoint")
 
 
-# flags as they were written before the command was its configuration (docs/evaluation.md): both forms work
+# flags as they were written before the command was its configuration (docs/commands.md): both forms work
 SPELLING = Spelling(renamed={"--envs": "--executor.workers", "--executor": "--executor.name",
                              "--address": "--executor.address", "--retries": "--executor.retries",
                              "--report": "--report.dir", "--videos": "--report.videos",

@@ -6,9 +6,10 @@ splits the action among the parts, runs each part's controller and records what 
 steps the goal is fixed and only the arm's torques change, so ``Servo.hold`` computes just those, with the same
 numpy operations in the same order on the same MuJoCo quantities (``mj_step1`` has computed them), and writes the
 same ``ctrl``: bit for bit what robosuite writes (``tests/test_env.py``), at a fraction of the time
-(``benchmarks/bench_env.py``). A policy step still runs robosuite's own ``control``, which sets the goal and the
-records; the gripper's command, a function of that goal alone, stays as robosuite wrote it. Any other controller
-runs robosuite's ``control`` at every update.
+(``benchmarks/bench_env.py``). A policy step runs robosuite's controllers as ``Robot.control`` does (the goal, the
+arm's torques, the gripper's command, which stays as written until the next policy step), less the records it
+keeps of each step (``recent_*``), which nothing in the task reads. Any other controller runs robosuite's
+``control`` at every update.
 """
 
 from __future__ import annotations
@@ -45,10 +46,25 @@ class Servo:
         if self.fast is None:
             self._setup()
         c = self.robot.part_controllers[self.arm]  # robosuite may build new controllers at a reset
-        if policy_step or not self.fast or c.goal_qpos is None:
+        if not self.fast or c.goal_qpos is None:
             self.robot.control(action, policy_step=policy_step)
+        elif policy_step:
+            self.new_goal(action)
         else:
             self.hold(c)
+
+    def new_goal(self, action: np.ndarray) -> None:
+        """A policy step: robosuite's ``Robot.control`` (the goal set, every part's controller run, ``ctrl`` clipped
+        and written) without the records it keeps of it (``recent_*``: the robot's energy and force integrals,
+        which nothing in the task reads)."""
+        robot = self.robot
+        composite = robot.composite_controller
+        composite.update_state()
+        composite.set_goal(action)
+        ranges = robot.sim.model._model.actuator_ctrlrange
+        for part, applied in composite.run_controller(robot._enabled_parts).items():
+            index = robot._ref_actuators_indexes_dict[part]
+            robot.sim.data.ctrl[index] = np.clip(applied, ranges[index, 0], ranges[index, 1])
 
     def hold(self, c: Any) -> None:
         """Write the arm's ``ctrl`` for controller ``c``'s goal from the state ``mj_step1`` left, with robosuite's

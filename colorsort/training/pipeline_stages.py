@@ -380,5 +380,6 @@ def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, stem: Pat
         print(f"reusing {path}")
         return json.loads(path.read_text())
     run([str(BIN / "colorsort-eval"), "--policy", str(model), "--variant", *settings, "--envs", str(envs),
-         "--json", str(path)], log_dir / f"{stem.parent.name}-{path.stem}.log")
+         "--json", str(path), "--resume"],  # an evaluation a Ctrl-C cut continues from its journal
+        log_dir / f"{stem.parent.name}-{path.stem}.log")
     return json.loads(path.read_text())
