@@ -45,19 +45,21 @@ def test_batch_sizes_1_2_and_5_give_the_expert_the_same_episodes_and_json(tmp_pa
 
 
 @pytest.mark.slow
-def test_batch_sizes_give_a_checkpoint_the_same_outcomes(tmp_path):
-    """A LeRobot checkpoint (the shipped state policy) acts on 1, 2 or 5 cells in one forward: the same outcome
-    and the same boxes for each seed (a batch of another size may round its last bits otherwise)."""
+@pytest.mark.parametrize(("policy", "sizes"), [("act-state", (1, 2, 5)), ("diffusion-camera-snapshot", (1, 3))])
+def test_batch_sizes_give_a_checkpoint_the_same_outcomes(tmp_path, policy, sizes):
+    """A LeRobot checkpoint acts on 1, 2 or 5 cells in one forward: the same outcome, steps and boxes for each
+    seed (a batch of another size may round its last bits otherwise). Diffusion Policy draws each world's noise
+    from its episode's seed, as the episode alone would."""
     outcomes = {}
-    for n in (1, 2, 5):
+    for n in sizes:
         out = tmp_path / f"b{n}.json"
-        assert exit_status(eval_main, ["--policy", str(ROOT / "baselines/act-state"), "--variant", "default",
-                                       "--episodes", "5", "--episode-length", "200", "--batch-size", str(n),
+        assert exit_status(eval_main, ["--policy", str(ROOT / "baselines" / policy), "--variant", "default",
+                                       "--episodes", "3", "--episode-length", "200", "--batch-size", str(n),
                                        "--json", str(out)]) == 0
-        outcomes[n] = [(e["seed"], e["ended"], e["correct"], [b["bin"] for b in e["boxes"]])
+        outcomes[n] = [(e["seed"], e["ended"], e["steps"], e["correct"], [b["bin"] for b in e["boxes"]])
                        for e in per_episode(out)]
-    assert outcomes[1] == outcomes[2] == outcomes[5]
-    assert sum(o[2] for o in outcomes[1]) >= 4
+    assert all(outcomes[n] == outcomes[sizes[0]] for n in sizes)
+    assert sum(o[3] for o in outcomes[sizes[0]]) >= 3
 
 
 class FakeCells:
@@ -95,6 +97,9 @@ class NullPolicy:
     name, restart_period = "null", 4
 
     def reset(self, seed):
+        pass
+
+    def begin(self, worlds, episodes):
         pass
 
     def act(self, obs, task, active):
@@ -175,3 +180,25 @@ def test_resume_needs_json_and_batch_size_and_precision_are_checked(capsys):
     assert "['float32', 'bfloat16']" in capsys.readouterr().err
     assert exit_status(eval_main, [*base, "--precision", "bfloat16", "--batch-size", "2"]) == 2
     assert "a learned policy's batched forward" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_batched_sweep_and_a_batched_report_give_what_batch_size_1_gives(tmp_path):
+    """--batch-size reaches sweeps (each cell switches its own shifts) and filmed reports (each cell films its own
+    episodes): the same rows and outcomes as one env at a time, a video per filmed episode."""
+    policy = str(ROOT / "baselines/act-state")
+    sweep = ["--policy", policy, "--variant", "default", "--sweep", "--sweep-shifts", "image-noise,box-offset",
+             "--levels", "2", "--episodes", "3", "--episode-length", "120"]
+    rows = {}
+    for n in (1, 3):
+        out = tmp_path / f"sweep{n}.json"
+        assert exit_status(eval_main, [*sweep, "--batch-size", str(n), "--json", str(out)]) == 0
+        done = json.loads(out.read_text())
+        rows[n] = [(r["shift"], r["level"], r["success"], r["misplaced"], r["dropped"]) for r in done["rows"]]
+        assert done["batch_size"] == n and done["precision"] == "float32"
+    assert rows[1] == rows[3] and len(rows[1]) == 3
+    report = tmp_path / "report"
+    assert exit_status(eval_main, ["--policy", policy, "--variant", "default", "--episodes", "2", "--episode-length",
+                                   "60", "--batch-size", "2", "--report", str(report), "--videos", "2"]) == 0
+    videos = sorted((report / "videos").glob("*.mp4"))
+    assert len(videos) == 2 and all(v.stat().st_size > 1000 for v in videos)

@@ -92,6 +92,10 @@ class LockstepPolicy(Protocol):
         """Before a run or a wave: its generator from ``seed``, its queues emptied."""
         ...
 
+    def begin(self, worlds: np.ndarray, episodes: Sequence[Episode]) -> None:
+        """``worlds`` start ``episodes``: whatever the policy draws for a world comes from that episode's seed."""
+        ...
+
     def act(self, obs: Observations, task: str, active: np.ndarray) -> Any:
         """(N, action size) actions; rows of inactive worlds are not taken."""
         ...
@@ -155,8 +159,17 @@ class BatchedPolicy:
 
         self.generator = torch.Generator(device=self.device).manual_seed(seed)
         torch.manual_seed(seed)
+        self.world_generators: dict[int, Any] = {}
         if self.policy is not None:
             self.policy.reset()
+
+    def begin(self, worlds: np.ndarray, episodes: Sequence[Episode]) -> None:
+        """Each of ``worlds`` draws Diffusion Policy's noise from its episode's seed, as the episode alone would
+        (``LeRobotPolicy.reset`` seeds torch with it): the same noise whichever world runs it, whatever the batch."""
+        import torch
+
+        for w, e in zip(worlds, episodes, strict=True):
+            self.world_generators[int(w)] = torch.Generator(device=self.device).manual_seed(e.seed)
 
     def act(self, obs: Observations, task: str, active: np.ndarray | None = None) -> Any:
         """Actions (N, action size) for every world's observation."""
@@ -173,8 +186,23 @@ class BatchedPolicy:
         autocast = (torch.autocast(self.device.type, dtype=torch.bfloat16) if self.precision == "bfloat16"
                     else contextlib.nullcontext())
         with torch.inference_mode(), autocast:
-            action = self.policy.select_action(self.preprocessor(batch))
+            action = self.policy.select_action(self.preprocessor(batch), **self._noise(n))
         return self.postprocessor(action.float())
+
+    def _noise(self, n: int) -> dict[str, Any]:
+        """Diffusion Policy's starting noise for the chunk it is about to predict, each world's from its own
+        generator (``begin``); nothing for a policy that draws none, or between chunks."""
+        import torch
+
+        assert self.policy is not None
+        config = self.policy.config
+        queue = getattr(self.policy, "_queues", None)
+        if config.type != "diffusion" or queue is None or len(queue["action"]) > 0:
+            return {}
+        shape = (config.horizon, config.action_feature.shape[0])
+        idle = torch.Generator(device=self.device).manual_seed(0)  # a world with no episode: never counted
+        return {"noise": torch.stack([torch.randn(shape, generator=self.world_generators.get(w, idle),
+                                                  device=self.device) for w in range(n)])}
 
 
 def restart_period(config: Any) -> int | None:
@@ -211,6 +239,7 @@ def run_waves(cells: Cells, policy: LockstepPolicy, episodes: Sequence[Episode],
         worlds = np.arange(len(wave))
         obs = cells.reset(wave, worlds)
         policy.reset(wave[0].seed)
+        policy.begin(worlds, wave)
         if film is not None:
             film.start()
             film.add()
@@ -260,6 +289,7 @@ def run_rolling(cells: Cells, policy: LockstepPolicy, episodes: Sequence[Episode
             free = np.flatnonzero(~active)[: len(episodes) - upcoming]
             started = list(episodes[upcoming : upcoming + len(free)])
             obs = cells.reset(started, free)
+            policy.begin(free, started)
             episode[free] = np.arange(upcoming, upcoming + len(free))
             start[free], active[free] = t, True
             upcoming += len(free)
