@@ -79,7 +79,10 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_tracking.py --presets default,tracking --robot UR5e --seeds 2 --boxes 10
 	$(VENV)/bin/python benchmarks/bench_collect.py --episodes 48
 	$(VENV)/bin/python benchmarks/bench_scale.py --episodes 16 --repeats 3 --eval-episodes 8
-	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera
+	$(VENV)/bin/python benchmarks/bench_forward.py --policies baselines/act-camera-tracking,baselines/act-camera,baselines/act-camera-snapshot,baselines/diffusion-camera-snapshot
+	$(VENV)/bin/python benchmarks/bench_eval.py --policies baselines/act-camera-tracking@tracking --episodes 32 --lerobot 8
+	$(VENV)/bin/python benchmarks/bench_eval.py --policies baselines/diffusion-camera-snapshot --episodes 32
+	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera-snapshot,baselines/act-camera --episodes 32 --lerobot 8
 	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
 	$(VENV)/bin/python benchmarks/bench_sweep.py
 	$(VENV)/bin/python benchmarks/bench_ci.py

@@ -14,6 +14,8 @@ INSTALL_REQUIRES = [
     "numpy>=2,<3",
     "opencv-python-headless>=4.11,<4.14",
     "lerobot[dataset,training,evaluation]>=0.6.1,<0.7",
+    "draccus>=0.11.6,<0.12",  # the commands' typed configs (cli/config_args.py), as LeRobot's; lerobot pins it too
+    "mergedeep>=1.3.4,<2",  # config_args.py merges a --config_path file under the command line with it
     "gymnasium>=1.0",
     # robosuite.wrappers imports h5py (DataCollectionWrapper) for every wrapper:
     "h5py>=3.10",

@@ -654,3 +654,18 @@ def test_a_sweep_gives_the_same_episodes_whatever_the_workers_and_the_jobs_and_a
     assert one[1].per_episode[0]["boxes"] and one[1].per_episode[0]["boxes"][0]["offset"] in (-0.07, 0.07)
     alone = run_evaluation("expert", ["default"], 1, shift=("camera-pose:3",), **kwargs)
     assert alone.reports[0].per_episode == one[2].per_episode  # an arm after others in one env: as if alone
+
+
+def test_shift_values_that_are_not_texts_and_sweep_shifts_with_levels_get_one_clear_error():
+    """``shift=5`` names what a shift is instead of a bare TypeError; ``--sweep-shifts all`` is every shift (as
+    --list-shifts offers it); ``--sweep-shifts image-noise:2`` says that --levels picks the levels."""
+    from colorsort.benchmark.shift_sweep import sweep_arms
+    from colorsort.shifts import SHIFTS, parse_shifts
+
+    with pytest.raises(ValueError, match=r"shift=5: give NAME:LEVEL texts.*camera-pose"):
+        parse_shifts(5)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="give NAME:LEVEL texts"):
+        parse_shifts([("camera-pose", 2)])  # type: ignore[list-item]
+    assert [a.shift for a in sweep_arms(2, 2, (1,), ("all",))][1:] == [f"{n}:1" for n in SHIFTS]
+    with pytest.raises(ValueError, match=r"give shift names alone \(--levels picks the levels\), e\.g\. image-noise"):
+        sweep_arms(2, 2, (2,), ("image-noise:2",))

@@ -24,7 +24,7 @@ from colorsort.benchmark.sweep_journal import Key
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.errors import ConfigError, Interrupted
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
-from colorsort.shifts import LEVELS, SHIFTS, parse_shifts, shift_label
+from colorsort.shifts import ALL, LEVELS, SHIFTS, parse_shifts, shift_label
 from colorsort.variants import SHIFT_SEEDS, get_variant
 
 CONTROL = "none"
@@ -55,6 +55,12 @@ def sweep_arms(episodes: int, side_episodes: int, levels: tuple[int, ...] = (1, 
                names: tuple[str, ...] | None = None) -> list[Arm]:
     """The control (``episodes``), then each shift at each of ``levels``: ``episodes`` at level 2, ``side_episodes``
     at the others. ValueError for an unknown shift or level, or more episodes than ``SHIFT_SEEDS``."""
+    if names and ALL in names:
+        names = None  # every shift, as --list-shifts offers it
+    for given in names or ():
+        if ":" in given:
+            raise ConfigError(f"--sweep-shifts {given}: give shift names alone (--levels picks the levels), e.g. "
+                              f"{given.partition(':')[0]}; names: {[*SHIFTS, ALL]}")
     for lv in levels:
         parse_shifts([f"{n}:{lv}" for n in names or ()])  # ValueError naming the valid shifts and levels
     names = tuple(n for n in SHIFTS if names is None or n in names)  # in the registry's order

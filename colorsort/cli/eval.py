@@ -132,7 +132,8 @@ class EvalCommandConfig:
     resume: bool = False  # run only the episodes the journal of --json (<json>.partial.jsonl) lacks
     backend: str = "cpu"  # cpu: the CPU cell (the reference); warp: the batched cell on MuJoCo Warp (docs/gpu.md)
     device: str | None = None  # --backend warp: Warp's device, cuda:0 (default) or cpu
-    # held-out shifts NAME:LEVEL, level 0-3 (all:L: every shift; see --list-shifts); --shift given twice adds
+    # held-out shifts NAME:LEVEL, level 0-3, or NAME:train for a shift's training range (all:L: every shift; see
+    # --list-shifts); --shift given twice adds
     shift: tuple[str, ...] = ()
     report: ReportConfig = field(default_factory=ReportConfig)
     sweep: SweepConfig = field(default_factory=SweepConfig)

@@ -73,6 +73,9 @@ def parse_shifts(given: str | Iterable[str] | None) -> tuple[ShiftLevel, ...]:
     registry's order; a shift given twice at different levels is refused. Level 0 is kept (it changes nothing)."""
     if given is None:
         return ()
+    if not isinstance(given, str) and not (isinstance(given, Iterable) and all(isinstance(t, str) for t in given)):
+        raise ConfigError(f"shift={given!r}: give NAME:LEVEL texts, a list or one comma-separated string "
+                          f"(e.g. 'camera-pose:2'); names: {[*SHIFTS, ALL]}; levels: {[*LEVELS, TRAIN]}")
     texts: Sequence[str] = [t for t in given.split(",") if t.strip()] if isinstance(given, str) else list(given)
     found: dict[str, int | str] = {}
     for text in texts:
