@@ -60,6 +60,7 @@ test-fast: lint
 # docs/results/<script>_<arguments>.md, which the docs pages link (records of one-off studies: docs/studies/)
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_env.py
+	$(VENV)/bin/python benchmarks/bench_profile.py
 	$(VENV)/bin/python benchmarks/bench_perception.py --views 1000
 	$(VENV)/bin/python benchmarks/bench_seal.py
 	$(VENV)/bin/python benchmarks/bench_sort.py --preset default --seeds 10 --boxes 20 --workers 2
@@ -82,7 +83,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_forward.py --policies baselines/act-camera-tracking,baselines/act-camera,baselines/act-camera-snapshot,baselines/diffusion-camera-snapshot
 	$(VENV)/bin/python benchmarks/bench_eval.py --policies baselines/act-camera-tracking@tracking --episodes 32 --lerobot 8
 	$(VENV)/bin/python benchmarks/bench_eval.py --policies baselines/diffusion-camera-snapshot --episodes 32
-	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera-snapshot,baselines/act-camera --episodes 32 --lerobot 8
+	$(VENV)/bin/python benchmarks/bench_eval.py --policies expert,baselines/act-state,baselines/act-camera-snapshot,baselines/act-camera --episodes 32
 	$(VENV)/bin/python benchmarks/bench_suite.py --episodes 10
 	$(VENV)/bin/python benchmarks/bench_sweep.py
 	$(VENV)/bin/python benchmarks/bench_ci.py

@@ -9,14 +9,14 @@ Runs ``--episodes`` episodes of each policy (``POLICY@VARIANT`` for another vari
 - physics: MuJoCo's ``mj_step1`` and ``mj_step2`` (robosuite's substeps) and ``mj_forward``;
 - controller: robosuite's controllers and ColorSort's servo (``envs/servo.py``), less the physics;
 - observables: robosuite's observables (cameras excluded) and ColorSort's state vectors;
-- rendering: every camera image (``CameraRenderer.image``), the policy's cameras and the expert's own photos;
+- rendering: every camera image (the env's own ``render_seconds``): the policy's cameras, the expert's photos;
 - referee and cell: the belt, the seal, the spawner and the referee (``Plant.physics_step``, ``control_step``);
-- policy: the policy's action (``select_action`` for a checkpoint, the expert's ``act``), rendering excluded;
+- policy: the policy's action, by the clock (``select_action`` for a checkpoint, the expert's ``act``, its photos
+  excluded);
 - the rest: the remainder of the episode loop (Gymnasium's step, robosuite's step, bookkeeping).
 
-Set-up (building the env, loading the policy) is left out: the profile starts at the first episode's reset. The
-parts are cumulative times under the profiler, which slows Python more than compiled code: trust the shares, not
-the seconds.
+Set-up (building the env, loading the policy) and one warm-up episode are left out. The parts are times under
+the profiler, which slows Python more than compiled code: trust the shares, not the seconds.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ import cProfile
 import os
 import pstats
 import time
+from typing import Any
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
@@ -41,9 +42,7 @@ PARTS: dict[str, tuple[tuple[str, str], ...]] = {
     "controller": (("robots/fixed_base_robot.py", "control"), ("envs/servo.py", "control")),
     "observables": (("robosuite/environments/base.py", "_get_observations"), ("envs/schema.py", "robot_state"),
                     ("envs/schema.py", "box_state"), ("envs/robosuite_task.py", "_sample_observables")),
-    "rendering": (("cell/cameras.py", "image"),),
     "referee and cell": (("cell/plant.py", "physics_step"), ("cell/plant.py", "control_step")),
-    "policy": (("benchmark/policies.py", "act"),),
 }
 
 
@@ -61,23 +60,35 @@ def profile(policy: str, variant: str, episodes: int) -> None:
     runner = EpisodeRunner(EvalConfig(policy, variant, size, cameras))
     seeds = episode_seeds(get_variant(variant), episodes, None)
     runner.episode(seeds[0])  # warm up: numba, the GL context, torch's first call
+    acting = runner.policy.act
+    spent = {"policy": 0.0}
+
+    def timed_act(obs: Any) -> Any:  # the policy's time by the clock: cProfile loses torch's under inference_mode
+        start = time.perf_counter()
+        action = acting(obs)
+        spent["policy"] += time.perf_counter() - start
+        return action
+
+    runner.policy.act = timed_act  # type: ignore[method-assign]
+    rendered = runner.env.env.render_seconds
     profiler = cProfile.Profile()
     start = time.perf_counter()
     profiler.enable()
     steps = sum(runner.episode(seed).steps for seed in seeds)
     profiler.disable()
-    wall = time.perf_counter() - start
+    total = time.perf_counter() - start
+    rendering = runner.env.env.render_seconds - rendered
     runner.close()
     stats = pstats.Stats(profiler)
-    total = sum(row[2] for row in stats.stats.values())  # type: ignore[attr-defined]
-    parts = {name: cumulative(stats, keys) for name, keys in PARTS.items()}
-    observed = cumulative(stats, (("cell/cameras.py", "camera_rgb"),))  # the policy's cameras, as observables
-    parts["observables"] -= observed
-    parts["policy"] -= parts["rendering"] - observed  # the expert's own photos, taken in its act
+    parts = {name: cumulative(stats, keys) for name, keys in PARTS.items() if name not in ("rendering", "policy")}
+    expert = policy == "expert"  # its photos are taken in its act; a checkpoint's cameras render as observables
+    parts["observables"] -= 0.0 if expert else rendering
+    parts["rendering"] = rendering
+    parts["policy"] = spent["policy"] - (rendering if expert else 0.0)
     parts["the rest"] = total - sum(parts.values())
     seen = f"cameras {'+'.join(cameras)} at {size[0]} px" if cameras else "no policy cameras"
-    print(f"\n{policy} on '{variant}', {episodes} episodes ({steps} control steps), {seen}: {wall:.1f} s without the "
-          f"profiler's set-up")
+    print(f"\n{policy} on '{variant}', {episodes} episodes ({steps} control steps), {seen}: {total:.1f} s under the "
+          f"profiler")
     print(f"{'part':<20}{'profiled [s]':>14}{'share':>8}{'per control step [ms]':>24}")
     for name, seconds in parts.items():
         print(f"{name:<20}{seconds:>14.2f}{seconds / total:>8.0%}{1000 * seconds / steps:>24.2f}")

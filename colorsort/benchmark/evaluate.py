@@ -9,8 +9,7 @@ finished episode reaches the caller as it finishes (a journal keeps it: Ctrl-C l
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -73,20 +72,23 @@ class EvalConfig:
 POLICY_THREADS = 1
 
 
-@contextmanager
-def policy_threads(spec: str) -> Iterator[None]:
-    """``POLICY_THREADS`` torch threads while a learned policy runs here; the process's own count back after (this
-    process may be the caller's)."""
+def set_policy_threads(spec: str) -> int | None:
+    """``POLICY_THREADS`` torch threads in this process while a learned policy runs here; the count it had before
+    (None for the expert and ``random``, which leave torch alone), for ``restore_threads``."""
     if spec in ("expert", "random"):
-        yield
-        return
+        return None
     import torch
 
     before = torch.get_num_threads()
     torch.set_num_threads(POLICY_THREADS)
-    try:
-        yield
-    finally:
+    return before
+
+
+def restore_threads(before: int | None) -> None:
+    """Give this process back the torch threads it had (it may be the caller's)."""
+    if before is not None:
+        import torch
+
         torch.set_num_threads(before)
 
 
@@ -100,8 +102,7 @@ class EpisodeRunner:
     """One env and one policy, built once per process, running episodes by seed (``--batch-size 1``)."""
 
     def __init__(self, settings: EvalConfig):
-        self._threads = policy_threads(settings.policy)
-        self._threads.__enter__()
+        self.threads_before = set_policy_threads(settings.policy)
         self.policy = make_policy(settings.policy)
         self.film = settings.film
         self.env = ColorSortGymEnv(get_variant(settings.variant), cameras=settings.cameras,
@@ -111,7 +112,7 @@ class EpisodeRunner:
     def close(self) -> None:
         """Close the env; give this process back the torch threads it had (it may be the caller's)."""
         self.env.close()
-        self._threads.__exit__(None, None, None)
+        restore_threads(self.threads_before)
 
     def episode(self, seed: int) -> EpisodeResult:
         """Run the episode of ``seed``: its figures, how it ended, each box's outcome (and its film)."""
@@ -190,23 +191,24 @@ def run_lockstep_job(job: EvalJob, ctx: TaskContext) -> int:
     s = job.settings
     variant = get_variant(s.variant)
     worlds = min(s.batch_size, len(job.episodes))
-    with policy_threads(s.policy):
-        cells = CpuCells(variant, worlds, s.cameras, s.image_size, s.episode_length, s.film)
-        try:
-            low, high = cells.envs[0].action_space.low, cells.envs[0].action_space.high
-            policy = BatchedPolicy(s.policy, "cpu", low, high, s.precision)
+    threads_before = set_policy_threads(s.policy)
+    cells = CpuCells(variant, worlds, s.cameras, s.image_size, s.episode_length, s.film)
+    try:
+        low, high = cells.envs[0].action_space.low, cells.envs[0].action_space.high
+        policy = BatchedPolicy(s.policy, "cpu", low, high, s.precision)
 
-            def sent(k: int, result: EpisodeResult) -> None:
-                ctx.send((s.variant, job.episodes[k].shift, result))
+        def sent(k: int, result: EpisodeResult) -> None:
+            ctx.send((s.variant, job.episodes[k].shift, result))
 
-            if policy.restart_period is not None:
-                found, _ = run_rolling(cells, policy, job.episodes, cells.max_steps, policy.restart_period,
-                                       cells.task, progress=False, stop=ctx.stopping, on_result=sent)
-            else:
-                found, _ = run_waves(cells, policy, job.episodes, cells.max_steps, cells.task, progress=False,
-                                     stop=ctx.stopping, on_result=sent)
-        finally:
-            cells.close()
+        if policy.restart_period is not None:
+            found, _ = run_rolling(cells, policy, job.episodes, cells.max_steps, policy.restart_period, cells.task,
+                                   progress=False, stop=ctx.stopping, on_result=sent)
+        else:
+            found, _ = run_waves(cells, policy, job.episodes, cells.max_steps, cells.task, progress=False,
+                                 stop=ctx.stopping, on_result=sent)
+    finally:
+        cells.close()
+        restore_threads(threads_before)
     return sum(r is not None for r in found)
 
 
