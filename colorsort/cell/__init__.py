@@ -1,1 +1,2 @@
-"""The physics: the robosuite task and the cell's parts (box pool, conveyor, referee, seal, cameras, lights)."""
+"""The physics: the cell's parts (box pool, conveyor, referee, seal, cameras, lights), wired to one model in
+``plant.py``; the robosuite task that hosts them is ``colorsort.envs.robosuite_task``."""

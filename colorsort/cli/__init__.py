@@ -1,1 +1,2 @@
-"""The console scripts: argument parsing and printing only; the work is done by the layers below."""
+"""The console scripts: each parses its typed configuration, calls the layers below and prints what they did;
+``colorsort-eval`` also keeps its run's journal beside ``--json`` (``benchmark/sweep_journal.py``)."""
