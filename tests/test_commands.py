@@ -92,3 +92,13 @@ def test_a_bad_collect_value_exits_2_naming_the_valid_ones(capsys, tmp_path):
         assert exit_status(collect_cli.main, [*argv, "--out", str(tmp_path / "d")]) == 2, argv
         assert named in capsys.readouterr().err, argv
     assert not (tmp_path / "d").exists()
+
+
+def test_collect_shift_given_twice_combines_and_refuses_a_held_out_level_wherever_it_is(capsys):
+    """colorsort-collect's --shift, repeated, combines as colorsort-eval's does: a held-out level given first is
+    refused (exit 2, one line), never dropped in favour of the last flag."""
+    assert collect_cli.parse_args(["--shift", "box-mass:train", "--shift", "image-noise:train"]).shift == \
+        "box-mass:train,image-noise:train"
+    assert collect_cli.main(["--shift", "camera-pose:2", "--shift", "image-noise:train", "--episodes", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "camera-pose:2 randomises into held-out level 2" in err[0]

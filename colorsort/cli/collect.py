@@ -44,7 +44,8 @@ SPELLING = Spelling(
     renamed={"--no-turn": "--turn_to_box=false", "--workers": "--executor.workers", "--executor": "--executor.name",
              "--retries": "--executor.retries", "--address": "--executor.address"},
     values={"cameras": parse_cameras, "image_size": parse_image_size, "expert": parse_changes},
-    members={name: ("perturbations", kind.parse) for name, kind in PERTURBATIONS.items()})
+    members={name: ("perturbations", kind.parse) for name, kind in PERTURBATIONS.items()},
+    joined=frozenset({"shift"}))  # --shift given twice combines, as colorsort-eval's does
 
 
 def perturbation_flags() -> str:

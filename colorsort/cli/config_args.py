@@ -49,11 +49,14 @@ class Spelling:
         values: a field's path -> a function from its text to its value (``image_size`` -> ``parse_image_size``).
         members: a member flag's path (``late_pass``) -> (the list field it adds to, a function from its text to
             the entry; every entry has a ``name``, the key entries are merged by).
+        joined: text fields holding a comma-separated list (``shift``): given twice, the values join, as a list
+            field's do (``--shift a:1 --shift b:train`` is ``--shift=a:1,b:train``), never the last alone.
     """
 
     renamed: Mapping[str, str] = types.MappingProxyType({})
     values: Mapping[str, Callable[[str], Any]] = types.MappingProxyType({})
     members: Mapping[str, tuple[str, Callable[[str], Any]]] = types.MappingProxyType({})
+    joined: frozenset[str] = frozenset()
 
 
 class _Formatter(SimpleHelpFormatter):
@@ -140,6 +143,7 @@ def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling,
     ``typed`` gets each renamed flag's new path and its old name as given."""
     out: list[str] = []
     lists: dict[str, list] = {}  # list fields given, or added to by member flags: their entries so far
+    joined: dict[str, list[str]] = {}  # comma-separated text fields given: their values so far
     i = 0
     while i < len(argv):
         token = argv[i]
@@ -175,6 +179,9 @@ def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling,
             new = entry(text)
             found[:] = [e for e in found if e.name != new.name] + [new]
             continue
+        if path in spelling.joined:
+            joined.setdefault(path, []).append(text)
+            continue
         if hint is None or path == CONFIG_ARG:
             out.append(f"--{path}={text}")
             continue
@@ -193,6 +200,7 @@ def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling,
         else:
             out.append(f"--{path}={json.dumps(draccus.encode(value))}")
     out += [f"--{path}={json.dumps(draccus.encode(tuple(entries)))}" for path, entries in lists.items()]
+    out += [f"--{path}={','.join(t for t in texts if t)}" for path, texts in joined.items()]
     return out
 
 
