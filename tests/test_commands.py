@@ -102,3 +102,13 @@ def test_collect_shift_given_twice_combines_and_refuses_a_held_out_level_whereve
     assert collect_cli.main(["--shift", "camera-pose:2", "--shift", "image-noise:train", "--episodes", "1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "camera-pose:2 randomises into held-out level 2" in err[0]
+
+
+def test_usage_shows_list_values_comma_separated_as_the_flags_take_them(capsys):
+    """--help's usage line writes a list field as the flags take it (commas), not draccus's space-separated form."""
+    with pytest.raises(SystemExit):
+        eval_cli.parse_args(["--help"])
+    usage = capsys.readouterr().out
+    assert "[--shift str,str,...]" in usage and "[--sweep.levels int,int,...]" in usage
+    assert "[str, ...]" not in usage and "[int, ...]" not in usage
+    assert eval_cli.parse_args(["--sweep", "--levels", "1,3"]).sweep.levels == (1, 3)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
@@ -60,10 +61,14 @@ class Spelling:
 
 
 class _Formatter(SimpleHelpFormatter):
-    """draccus's help, wider, the module docstring as written."""
+    """draccus's help, wider, the module docstring as written, a list's values shown as they are given."""
 
     def __init__(self, prog: str) -> None:
         super().__init__(prog, max_help_position=32, width=118)
+
+    def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
+        # draccus shows a tuple field as "str [str, ...]", values after spaces, which the flags do not take
+        return re.sub(r"^(\w+) \[\1, \.\.\.\]$", r"\1,\1,...", super()._format_args(action, default_metavar))
 
 
 class _Parser(ArgumentParser):
