@@ -25,7 +25,7 @@ def help_of(command: str, cwd: Path) -> str:
 @pytest.mark.parametrize(("command", "nested"), [
     ("colorsort-collect", ["--executor.workers int tasks run at once (local: processes; ray: tasks of 1 CPU each)",
                            "--executor.name str \"local\": processes on this machine; \"ray\": a Ray cluster"]),
-    ("colorsort-eval", ["--report.dir [str] write a report page here", "--sweep.levels int [int, ...] the levels",
+    ("colorsort-eval", ["--report.dir [str] write a report page here", "--sweep.levels int,int,... the levels",
                         "--executor.workers int tasks run at once"]),
     ("colorsort-baseline", ["--training.steps int training updates of the largest demo set.",
                             "--policy.type {act,diffusion}", "--dagger.rounds int rounds after the first training"]),
