@@ -669,3 +669,15 @@ def test_shift_values_that_are_not_texts_and_sweep_shifts_with_levels_get_one_cl
     assert [a.shift for a in sweep_arms(2, 2, (1,), ("all",))][1:] == [f"{n}:1" for n in SHIFTS]
     with pytest.raises(ValueError, match=r"give shift names alone \(--levels picks the levels\), e\.g\. image-noise"):
         sweep_arms(2, 2, (2,), ("image-noise:2",))
+
+
+def test_a_shifted_printout_says_what_was_drawn_and_how_many_episodes_stalled():
+    from colorsort.benchmark.metrics import format_report
+
+    report = run_evaluation("expert", ["default"], 2, shift=("box-size:2",), episode_length=30, progress=False,
+                            cameras=()).reports[0]
+    printed = format_report(report)
+    assert re.search(r"^stalled \(time limit\) +2$", printed, flags=re.M)  # 30 steps: no box reaches a bin
+    edges = sorted({e["shift"]["box-size"]["edge_cm"] for e in report.per_episode})
+    assert re.search(rf"^drawn: box-size +edge_cm {', '.join(f'{v:g}' for v in edges)} over 2 episodes$", printed,
+                     flags=re.M)

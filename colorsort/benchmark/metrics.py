@@ -80,8 +80,27 @@ def format_report(r: EvalReport) -> str:
         ("distractors let through", f"{r.distractors_let_through}/{r.distractors}"),
         ("boxes per minute", f"{r.boxes_per_minute:.1f}"), ("mean cycle time", cycle),
         ("seeds", f"{r.seeds[0]}..{r.seeds[-1]}" if r.seeds else "-"),
+        ("stalled (time limit)", str(sum(e["ended"] == "time limit" for e in r.per_episode))),
+        *drawn(r.per_episode),
     ]
     return "\n".join(f"{k:<24} {v}" for k, v in rows)
+
+
+def drawn(per_episode: list[dict]) -> list[tuple[str, str]]:
+    """What held-out shifts drew over the episodes, a row per shift and number drawn (``edge_cm 8.0-12.0``, or the
+    values themselves where there are three or fewer); a draw of vectors (a camera's move) is in ``--json`` only."""
+    found: dict[tuple[str, str], list[float]] = {}
+    for episode in per_episode:
+        for name, draws in episode.get("shift", {}).items():
+            for key, value in draws.items():
+                if key != "level" and isinstance(value, int | float) and not isinstance(value, bool):
+                    found.setdefault((name, key), []).append(float(value))
+    rows = []
+    for (name, key), values in found.items():
+        distinct = sorted(set(values))
+        shown = ", ".join(f"{v:g}" for v in distinct) if len(distinct) <= 3 else f"{min(values):g}-{max(values):g}"
+        rows.append((f"drawn: {name}", f"{key} {shown} over {len(values)} episodes"))
+    return rows
 
 
 def format_table(reports: list[EvalReport]) -> str:
