@@ -1,9 +1,10 @@
-"""A sweep's journal: every finished episode written as it arrives, so an interrupted sweep resumes.
+"""A run's journal: every finished episode written as it arrives, so an interrupted sweep or evaluation resumes.
 
-A whole sweep runs for hours on a few cores (docs/shifts.md); the journal, ``<--json>.partial.jsonl``, holds one
-line per finished episode (its arm's shift, its seed, its ``EpisodeResult``) after a header that says what made
-them: the policy's checkpoint (a digest of its files), the variant, the cameras and image size, the episode length
-and the versions of the code that runs an episode (``colorsort.versions``: the cell, the expert, the shifts). An
+A whole sweep runs for many minutes on a few cores (docs/shifts.md); the journal, ``<--json>.partial.jsonl``, holds
+one line per finished episode (its arm: a sweep's shift, or a plain run's ``variant/shifts``; its seed; its
+``EpisodeResult``) after a header that says what made them (a plain run's says ``kind: evaluation``): the
+policy's checkpoint (a digest of its files), the variant, the cameras and image size, the episode length and the
+versions of the code that runs an episode (``colorsort.versions``: the cell, the expert, the shifts). An
 episode of a sweep depends on its shift and seed alone, whatever the other arms, the workers or the jobs
 (``tests/test_shifts.py``), so ``--resume`` runs only the episodes the journal lacks, and may add arms or episodes;
 a journal whose header differs from the sweep asked for is refused, naming what differs, never reused. A line cut
