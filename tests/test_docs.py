@@ -175,3 +175,43 @@ def test_make_bench_rewrites_exactly_the_results_files_the_docs_link(monkeypatch
     expected = {results_path(argv[0], argv[1:]).name for argv in commands}
     present = {p.name for p in (REPO / "docs" / "results").glob("*.md")}
     assert expected == present, f"make bench writes {sorted(expected - present)}; unknown: {sorted(present - expected)}"
+
+
+NAMED_PATH = re.compile(r"(?<![\w/.-])((?:docs|colorsort|benchmarks|tests|tools|demos|baselines|assets)/[\w./-]*\w)")
+RETIRED = re.compile(r"git show \w+:\S+")  # a file as it was at a commit: named on purpose, gone since
+ELSEWHERE = {"colorsort/assets": "the wheel's copy of assets/ (docs/install.md)"}
+
+
+def named_paths(text: str) -> set[str]:
+    """Repository paths a text names (``docs/shifts.md``, ``colorsort/envs/servo.py``); not placeholders
+    (``baselines/NAME``), prefixes (``demos/probe_``), Gymnasium ids (``colorsort/ColorSort-v0``), globs or files
+    named as they were at a commit."""
+    found = set()
+    text = RETIRED.sub("", text)
+    for match in NAMED_PATH.finditer(text):
+        if text[match.end():match.end() + 1] == "<":  # a pattern: baselines/NAME/seed<N>/
+            continue
+        name = match.group(1).partition("#")[0]
+        parts = name.split("/")
+        if ("*" in name or "<" in name or name.endswith("_") or parts[1].startswith("ColorSort")
+                or any(p.isupper() for p in parts)):
+            continue
+        found.add(name)
+    return found
+
+
+def test_every_path_a_docstring_or_a_docs_page_names_exists():
+    """A module, file or page named in a Python file's text (docstrings, comments) or a docs page is there: a
+    description that names a moved or renamed file is caught. The studies are dated run logs that name files as
+    they were then."""
+    pages = [p for p in PAGES if "studies" not in p.parts]
+    code = sorted(p for d in ("colorsort", "benchmarks", "tools", "demos") for p in (REPO / d).rglob("*.py"))
+    sources = [*pages, *code]
+    missing = {}
+    for source in sources:
+        for name in named_paths(source.read_text()):
+            if name in ELSEWHERE:
+                continue
+            if not any(p.exists() for p in (REPO / name, REPO / "colorsort" / name, source.parent / name)):
+                missing.setdefault(name, str(source.relative_to(REPO)))
+    assert not missing, f"named but not in the repository (path: where it is named): {missing}"
