@@ -157,3 +157,26 @@ def test_no_private_name_crosses_a_module():
             if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("colorsort"):
                 crossing += [f"{name} imports {node.module}.{a.name}" for a in node.names if a.name.startswith("_")]
     assert not crossing, "\n".join(crossing)
+
+
+# names each console script or worker module defines for its own use, by one convention
+PER_MODULE = {"main", "parse_args", "SPELLING", "PRELOAD"}
+# public names still defined in two modules with two meanings ("one name per concept"): to be renamed; none may be
+# added to this list
+TWO_MEANINGS = {"Phase", "park_position", "BACKENDS", "machine", "evaluate", "headline", "fill", "collect", "STREAM",
+                "register", "merge", "SHIFTS", "label", "parameters"}
+
+
+def test_a_public_name_is_defined_in_one_module():
+    """A top-level public class, function or constant means one thing: defined in one module (console scripts'
+    ``main`` and ``parse_args`` aside, and the few names ``TWO_MEANINGS`` lists until they are renamed)."""
+    defined: dict[str, list[str]] = {}
+    for name, path in modules():
+        for node in ast.parse(path.read_text()).body:
+            names = [node.name] if isinstance(node, ast.ClassDef | ast.FunctionDef) else [
+                t.id for t in getattr(node, "targets", [getattr(node, "target", None)]) if isinstance(t, ast.Name)]
+            for found in names:
+                if not found.startswith("_") and (isinstance(node, ast.ClassDef | ast.FunctionDef) or found.isupper()):
+                    defined.setdefault(found, []).append(name)
+    twice = {n: ms for n, ms in defined.items() if len(ms) > 1 and n not in TWO_MEANINGS | PER_MODULE}
+    assert not twice, f"public names defined in more than one module: {twice}"

@@ -15,7 +15,7 @@ import pytest
 from helpers import exit_status
 
 from colorsort.benchmark.episode_result import EpisodeResult
-from colorsort.benchmark.lockstep import Episode, run_rolling, run_waves
+from colorsort.benchmark.lockstep import EpisodePlan, run_rolling, run_waves
 from colorsort.benchmark.sweep_journal import journal_path
 from colorsort.cli.eval import main as eval_main
 
@@ -109,18 +109,18 @@ class NullPolicy:
 def test_rolling_starts_the_next_episode_in_a_freed_world_at_a_restart_point_and_waves_wait():
     lengths = [5, 13, 7, 6, 9]
     cells = FakeCells(2)
-    results, _ = run_rolling(cells, NullPolicy(), [Episode(s) for s in lengths], 100, 4, "t", progress=False)
+    results, _ = run_rolling(cells, NullPolicy(), [EpisodePlan(s) for s in lengths], 100, 4, "t", progress=False)
     assert [r.seed for r in results] == lengths and [r.steps for r in results] == lengths
     # world 0 ends its 5 at step 5, takes 7 at step 8 (the next restart point), ends at 15, takes 6 at 16 ...;
     # world 1 runs its 13 undisturbed, then takes 9 at the restart point 16
     assert cells.started == [(0, 0, 5), (0, 1, 13), (8, 0, 7), (16, 0, 6), (16, 1, 9)]
     waves = FakeCells(2)
-    results, _ = run_waves(waves, NullPolicy(), [Episode(s) for s in lengths], 100, "t", progress=False)
+    results, _ = run_waves(waves, NullPolicy(), [EpisodePlan(s) for s in lengths], 100, "t", progress=False)
     assert [r.steps for r in results] == lengths
     assert waves.started == [(0, 0, 5), (0, 1, 13), (13, 0, 7), (13, 1, 6), (20, 0, 9)]  # each wave waits its longest
     stopped = FakeCells(2)
     calls = iter(range(1000))
-    results, _ = run_rolling(stopped, NullPolicy(), [Episode(s) for s in lengths], 100, 4, "t", progress=False,
+    results, _ = run_rolling(stopped, NullPolicy(), [EpisodePlan(s) for s in lengths], 100, 4, "t", progress=False,
                              stop=lambda: next(calls) >= 3)  # a stop at step 3: the worlds finish, nothing starts
     assert [r.seed if r else None for r in results] == [5, 13, None, None, None]
 

@@ -26,7 +26,7 @@ from colorsort.batched.kernels import OUTCOMES
 from colorsort.batched.schedule import COLOR_NAMES
 from colorsort.batched.spec import CellSpec, spec_for_variant
 from colorsort.benchmark.episode_result import EpisodeResult, box_record
-from colorsort.benchmark.lockstep import BatchedPolicy, Episode, WaveTiming, run_rolling, run_waves
+from colorsort.benchmark.lockstep import BatchedPolicy, EpisodePlan, WaveTiming, run_rolling, run_waves
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.report_page import choose_films
 from colorsort.cell.referee import BoxEvent, Outcome
@@ -65,7 +65,7 @@ class WarpCells:
     def __init__(self, cell: BatchedCell, variant: Variant):
         self.cell, self.variant, self.worlds = cell, variant, cell.worlds
 
-    def reset(self, episodes: Sequence[Episode], worlds: np.ndarray) -> StepResult:
+    def reset(self, episodes: Sequence[EpisodePlan], worlds: np.ndarray) -> StepResult:
         if any(e.shift for e in episodes):
             raise ConfigError("the batched cell (MuJoCo Warp) applies no held-out shift yet")
         seeds = [e.seed for e in episodes]
@@ -138,7 +138,7 @@ def evaluate_batched(policy_spec: str, variant_name: str, episodes: int, *, seed
     spawns = int(np.ceil(max_steps / spec.control_freq / variant.task_config.spawn_period)) + 2
     cell = BatchedCell(spec, variant, min(envs, len(seeds)), device=device, max_boxes=max(variant.boxes + 2, spawns),
                        cameras=policy.cameras, image_size=policy.image_size or (64, 64))
-    cells, runs = WarpCells(cell, variant), [Episode(s) for s in seeds]
+    cells, runs = WarpCells(cell, variant), [EpisodePlan(s) for s in seeds]
     filming = Filming(FilmViewer(spec, variant), videos) if film else None
     task, desc = f"Sort the next {variant.boxes} boxes from the conveyor into the bins of their colours.", \
         f"{policy.name} on {variant.name} (warp)"

@@ -1,7 +1,7 @@
 """N CPU cells in one process, stepped together (``colorsort-eval --batch-size N``): ``lockstep.Cells`` on MuJoCo.
 
 Each world is a ``ColorSortGymEnv`` of its own, built once and reused episode after episode (an episode starts from
-its seed and shifts alone, ``lockstep.Episode``); a step steps the active ones in turn. What the batch buys is the
+its seed and shifts alone, ``lockstep.EpisodePlan``); a step steps the active ones in turn. What the batch buys is the
 policy: one forward over N observations costs far less than N forwards (``benchmarks/bench_forward.py``). An
 episode's result is ``cpu_episode_result``'s, the one ``evaluate.EpisodeRunner`` writes.
 """
@@ -16,7 +16,7 @@ import numpy as np
 
 from colorsort.benchmark.episode_result import EpisodeResult, box_record
 from colorsort.benchmark.filming import EpisodeFilm
-from colorsort.benchmark.lockstep import Episode
+from colorsort.benchmark.lockstep import EpisodePlan
 from colorsort.cell.plant import Grip
 from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.variants import Variant
@@ -72,7 +72,7 @@ class CpuCells:
         self.films: list[EpisodeFilm | None] = [None] * worlds
         self._fresh: set[int] = set()  # worlds whose film lacks its first frame
 
-    def reset(self, episodes: Sequence[Episode], worlds: np.ndarray) -> CpuObservations:
+    def reset(self, episodes: Sequence[EpisodePlan], worlds: np.ndarray) -> CpuObservations:
         for w, e in zip(worlds, episodes, strict=True):
             env = self.envs[w]
             if env.shift != tuple(e.shift):

@@ -19,7 +19,7 @@ from tqdm import tqdm
 from colorsort.benchmark.cpu_cells import CpuCells, cpu_episode_result
 from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.filming import EpisodeFilm
-from colorsort.benchmark.lockstep import BatchedPolicy, Episode, run_rolling, run_waves
+from colorsort.benchmark.lockstep import BatchedPolicy, EpisodePlan, run_rolling, run_waves
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec, checkpoint_cameras, make_policy
 from colorsort.benchmark.sweep_journal import Key
@@ -153,7 +153,7 @@ class EvalJob:
     """Episodes of one variant, each its seed and shifts: one task of the executor."""
 
     settings: EvalConfig
-    episodes: tuple[Episode, ...]
+    episodes: tuple[EpisodePlan, ...]
 
     @property
     def key(self) -> str:
@@ -237,7 +237,7 @@ def run_jobs(tasks: list[tuple[str, Callable, Any]], episodes: int, executor: Ex
     return [r.value for r in results]
 
 
-def run_episodes(work: list[tuple[EvalConfig, list[Episode]]], executor: ExecutorConfig, shard_size: int,
+def run_episodes(work: list[tuple[EvalConfig, list[EpisodePlan]]], executor: ExecutorConfig, shard_size: int,
                  progress: bool, desc: str, on_episode: Callable[[Finished], None] | None = None) -> list[Finished]:
     """Each ``(settings, episodes)`` pair's episodes in jobs of at most ``shard_size`` (enough jobs to keep every
     worker busy) on ``executor``, all at once; every finished one as ``Finished``, each also given to
@@ -298,7 +298,7 @@ def run_evaluation(policy_spec: str, variant_names: list[str], episodes: int, *,
     found = {(v, s): done[(arm_key(v, shift), s)] for v, seeds in planned.items() for s in seeds
              if (arm_key(v, shift), s) in done}
     work = [(EvalConfig(path, v, (image_size[0], image_size[1]), tuple(cameras), episode_length, film, shift,
-                        batch_size, precision), [Episode(s, shift) for s in seeds if (v, s) not in found])
+                        batch_size, precision), [EpisodePlan(s, shift) for s in seeds if (v, s) not in found])
             for v, seeds in planned.items()]
 
     def arrived(message: Finished) -> None:

@@ -12,7 +12,7 @@ the batch). Two ways to fill the worlds:
   cell's films: N worlds start together, the policy is reset once a wave, and a world whose episode ended waits
   for its wave to end (the batched cell steps it on; nothing after its end counts).
 
-An episode is its seed and its held-out shifts (``Episode``): it starts from them alone, so it is the same whichever
+An episode is its seed and its held-out shifts (``EpisodePlan``): it starts from them alone, so it is the same whichever
 world runs it and when, up to the rounding of a batched forward (a batch of another size sums in another order; a
 box may then settle a few steps apart). ``stop()`` turning true (Ctrl-C) starts no new episode; the worlds finish
 theirs, and what never started is missing from the results (None).
@@ -37,7 +37,7 @@ PRECISIONS = ("float32", "bfloat16")  # bfloat16: the forward under CPU autocast
 
 
 @dataclass(frozen=True)
-class Episode:
+class EpisodePlan:
     """One episode to run: its seed and its held-out shifts (``NAME:LEVEL`` texts; none: unshifted)."""
 
     seed: int
@@ -65,7 +65,7 @@ class Cells(Protocol):
 
     worlds: int
 
-    def reset(self, episodes: Sequence[Episode], worlds: np.ndarray) -> Observations:
+    def reset(self, episodes: Sequence[EpisodePlan], worlds: np.ndarray) -> Observations:
         """Start ``episodes[i]`` in world ``worlds[i]``; the others carry on."""
         ...
 
@@ -92,7 +92,7 @@ class LockstepPolicy(Protocol):
         """Before a run or a wave: its generator from ``seed``, its queues emptied."""
         ...
 
-    def begin(self, worlds: np.ndarray, episodes: Sequence[Episode]) -> None:
+    def begin(self, worlds: np.ndarray, episodes: Sequence[EpisodePlan]) -> None:
         """``worlds`` start ``episodes``: whatever the policy draws for a world comes from that episode's seed."""
         ...
 
@@ -163,7 +163,7 @@ class BatchedPolicy:
         if self.policy is not None:
             self.policy.reset()
 
-    def begin(self, worlds: np.ndarray, episodes: Sequence[Episode]) -> None:
+    def begin(self, worlds: np.ndarray, episodes: Sequence[EpisodePlan]) -> None:
         """Each of ``worlds`` draws Diffusion Policy's noise from its episode's seed, as the episode alone would
         (``LeRobotPolicy.reset`` seeds torch with it): the same noise whichever world runs it, whatever the batch."""
         import torch
@@ -222,7 +222,7 @@ def restart_period(config: Any) -> int | None:
 OnResult = Callable[[int, EpisodeResult], None]  # (the episode's index, its result), as each finishes
 
 
-def run_waves(cells: Cells, policy: LockstepPolicy, episodes: Sequence[Episode], max_steps: int, task: str,
+def run_waves(cells: Cells, policy: LockstepPolicy, episodes: Sequence[EpisodePlan], max_steps: int, task: str,
               progress: bool = True, film: WaveFilm | None = None, stop: Callable[[], bool] = lambda: False,
               on_result: OnResult | None = None,
               desc: str = "evaluating") -> tuple[list[EpisodeResult | None], WaveTiming]:
@@ -264,7 +264,7 @@ def run_waves(cells: Cells, policy: LockstepPolicy, episodes: Sequence[Episode],
     return results, WaveTiming(time.perf_counter() - start, control_steps, n)
 
 
-def run_rolling(cells: Cells, policy: LockstepPolicy, episodes: Sequence[Episode], max_steps: int, period: int,
+def run_rolling(cells: Cells, policy: LockstepPolicy, episodes: Sequence[EpisodePlan], max_steps: int, period: int,
                 task: str, progress: bool = True, stop: Callable[[], bool] = lambda: False,
                 on_result: OnResult | None = None,
                 desc: str = "evaluating") -> tuple[list[EpisodeResult | None], WaveTiming]:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from colorsort.benchmark.episode_result import EpisodeResult
 from colorsort.benchmark.evaluate import EvalConfig, Finished, run_episodes
-from colorsort.benchmark.lockstep import Episode
+from colorsort.benchmark.lockstep import EpisodePlan
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.policies import check_policy_spec
 from colorsort.benchmark.sweep_journal import Key
@@ -94,7 +94,7 @@ def run_sweep(policy: str, variant: str, arms: list[Arm], *, image_size: tuple[i
     path = policy if policy in ("expert", "random") else str(Path(policy).resolve())
     settings = EvalConfig(path, variant, image_size, tuple(cameras), episode_length, batch_size=batch_size,
                           precision=precision)
-    episodes = [Episode(seed, () if shift == CONTROL else (shift,))
+    episodes = [EpisodePlan(seed, () if shift == CONTROL else (shift,))
                 for arm in arms for shift, seed in arm.keys if (shift, seed) not in done]
 
     def finished(message: Finished) -> None:

@@ -20,7 +20,7 @@ from tqdm import tqdm
 
 from colorsort.data import store
 from colorsort.data.config import CollectConfig
-from colorsort.data.recorder import EpisodeResult
+from colorsort.data.recorder import TriedEpisode
 from colorsort.data.shards import PRELOAD, ShardJob, merge, merge_in_child, record, shard_name, summary_of
 from colorsort.executors.base import Task, TaskResult, chunks, forwarded_env
 from colorsort.executors.factory import make_executor
@@ -103,7 +103,7 @@ class _Progress:
         self.summary, self.shards, self.done = summary, shards, 0
         self.bar = tqdm(total=episodes, unit="episode", desc="recording", disable=not show, smoothing=0.1)
 
-    def on_episode(self, r: EpisodeResult) -> None:
+    def on_episode(self, r: TriedEpisode) -> None:
         s = self.summary
         s.tried += 1
         if r.kept:

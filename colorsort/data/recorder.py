@@ -33,7 +33,10 @@ STAGES = ("setup", "expert", "physics and control", "rendering", "frames to lero
 
 
 @dataclass(frozen=True)
-class EpisodeResult:
+class TriedEpisode:
+    """One demo the recorder tried: kept in the dataset, or why not (not an evaluated episode: that is
+    ``benchmark.episode_result.EpisodeResult``)."""
+
     index: int  # episode number i: seed = base seed + i
     seed: int
     kept: bool
@@ -112,7 +115,7 @@ class FrameWriter(Observer):
 
 
 def record_shard(config: CollectConfig, indices: list[int], root: Path,
-                 report: Callable[[EpisodeResult], None], stop: Callable[[], bool] = lambda: False) -> ShardSummary:
+                 report: Callable[[TriedEpisode], None], stop: Callable[[], bool] = lambda: False) -> ShardSummary:
     """Record episodes ``indices`` into a new dataset at ``root``; always finalizes what it saved.
 
     Ctrl-C (KeyboardInterrupt) or ``stop()`` turning true abandons the episode under way and
@@ -167,7 +170,7 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                     out.failed[str(index)] = reason
                 out.tried.append(index)
             sec["episode saving"] += time.perf_counter() - t
-            report(EpisodeResult(index, seed, reason == "ok", reason, frames, frames / config.fps))
+            report(TriedEpisode(index, seed, reason == "ok", reason, frames, frames / config.fps))
     except (KeyboardInterrupt, Stopped):
         out.interrupted = True
     except Exception:  # noqa: BLE001 - reported to the caller, finished episodes are still saved
