@@ -35,8 +35,7 @@ from colorsort.envs.robosuite_task import ColorSort
 from colorsort.expert.config import TRACKING_EXPERT, ExpertConfig
 from colorsort.expert.factory import make_expert
 from colorsort.expert.planning import JointTrajectory
-from colorsort.expert.tracking import Phase as TrackingPhase
-from colorsort.expert.tracking import TrackingExpert
+from colorsort.expert.tracking import TrackingExpert, TrackingPhase
 from colorsort.results import recorded
 
 # the expert's phases that a cycle needs: the way back from the bin counts whether it heads for the next box or,

@@ -11,7 +11,7 @@ from colorsort.cli.sort import main as sort_main
 from colorsort.expert.config import STOPPING_EXPERT
 from colorsort.expert.factory import make_expert
 from colorsort.expert.planning import site_yaw
-from colorsort.expert.sorter import Phase
+from colorsort.expert.sorter import SorterPhase
 
 
 def make_expert_env(make_env, robot="IRB140", config=None, **kwargs):
@@ -84,7 +84,7 @@ def test_does_not_pick_while_the_belt_runs_with_no_box_at_the_sensor(make_env):
     def check(action, obs, info):
         if not any(seen) and not info["box_detected"]:  # the box still rides toward the sensor: the arm waits
             assert info["belt_running"]
-            assert expert.phase in (Phase.MOVE_TO_WAIT, Phase.WAIT_FOR_BOX)
+            assert expert.phase in (SorterPhase.MOVE_TO_WAIT, SorterPhase.WAIT_FOR_BOX)
             assert action[-2] < 0
         seen.append(info["box_detected"])
 

@@ -9,8 +9,8 @@ from test_expert import assert_all_in_their_bins, make_expert_env, run_until
 
 from colorsort.cell.privileged import TakeOver, take_over_view
 from colorsort.expert.factory import make_expert
-from colorsort.expert.sorter import Phase
-from colorsort.expert.tracking import Phase as TrackingPhase
+from colorsort.expert.sorter import SorterPhase
+from colorsort.expert.tracking import TrackingPhase
 
 
 def expert_until(env, expert, obs, done, max_time: float = 20.0):
@@ -30,7 +30,7 @@ def test_from_an_arm_pose_of_its_own_it_sorts_every_box(make_env):
     obs, _ = move_to(env, pose, suction=-1.0, duration=1.5, settle=0.5)
     assert not env.suction_sealed
     expert.take_over(obs, take_over_view(env))
-    assert expert.phase is Phase.CLEAR
+    assert expert.phase is SorterPhase.CLEAR
     run_until(env, expert, obs, boxes=3, max_time=30.0)
     assert_all_in_their_bins(env, 3)
 
@@ -40,7 +40,7 @@ def test_a_box_dropped_back_on_the_belt_is_picked_again(make_env):
     """The cup lets go of its box 2 cm over the belt just after the seal; the box falls back at the sensor, and
     the expert, taking over with nothing held, looks at it again, picks it and sorts every box."""
     env, expert, obs = make_expert_env(make_env)
-    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.BACK_UP)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is SorterPhase.BACK_UP)
     cup_z = float(obs["robot0_eef_pos"][2])
     obs = expert_until(env, expert, obs, lambda _, o: float(o["robot0_eef_pos"][2]) > cup_z + 0.02)
     obs, _ = move_to(env, obs["robot0_joint_pos"], suction=-1.0, duration=0.05, settle=1.0)  # let go, held still
@@ -56,7 +56,7 @@ def test_a_box_carried_over_the_wrong_bin_goes_to_the_bin_of_its_colour(make_env
     """A policy carried the sealed box over another colour's bin; told what it holds, the expert takes it on to
     its own bin and sorts the rest."""
     env, expert, obs = make_expert_env(make_env)
-    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.MOVE_OVER_BIN)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is SorterPhase.MOVE_OVER_BIN)
     color = take_over_view(env).held
     wrong = next(c for c in expert.q_drop if c != color)
     obs, _ = move_to(env, expert.q_drop[wrong][0], suction=1.0, duration=1.5, settle=0.3)
@@ -72,11 +72,11 @@ def test_a_held_box_of_no_bin_colour_goes_back_onto_the_belt_at_the_sensor(make_
     """Told that the held box has no bin (a distractor a policy picked), the expert sets it back on the belt at the
     sensor to be looked at again: here the box is in fact red, so the next look sends it to the red bin."""
     env, expert, obs = make_expert_env(make_env)
-    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.MOVE_OVER_BIN)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is SorterPhase.MOVE_OVER_BIN)
     color = take_over_view(env).held
     expert.take_over(obs, TakeOver("yellow", ()))
-    obs = expert_until(env, expert, obs, lambda e, _: e.phase is Phase.RELEASE)
-    obs = expert_until(env, expert, obs, lambda e, _: e.phase is not Phase.RELEASE)  # let go of it
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is SorterPhase.RELEASE)
+    obs = expert_until(env, expert, obs, lambda e, _: e.phase is not SorterPhase.RELEASE)  # let go of it
     assert env.box_detected and not env.suction_sealed and not env.events  # on the belt at the ray, in no bin
     run_until(env, expert, obs, boxes=3, max_time=35.0)
     assert_all_in_their_bins(env, 3)

@@ -227,7 +227,7 @@ def test_the_legs_follow_on_without_a_pause_and_the_carry_leaves_halfway_up_clea
 
     from colorsort.expert.config import TRACKING_EXPERT
     from colorsort.expert.planning import JointTrajectory
-    from colorsort.expert.tracking import DensePath, Phase
+    from colorsort.expert.tracking import DensePath, TrackingPhase
 
     env = make_env(preset="tracking-fast", has_offscreen_renderer=True, ignore_done=True, seed=3)
     obs = env.reset()
@@ -242,7 +242,7 @@ def test_the_legs_follow_on_without_a_pause_and_the_carry_leaves_halfway_up_clea
     expert.reset(obs)
     tracks = carries = releases = rail_contacts = 0
     while len(env.events) < 4 and env.cur_time < 30.0:
-        before, now, carrying = expert.motion, expert.time, expert.phase is Phase.MOVE_OVER_BIN
+        before, now, carrying = expert.motion, expert.time, expert.phase is TrackingPhase.MOVE_OVER_BIN
         obs, *_ = env.step(expert.act(obs))
         rail_contacts += sum(d.contact[i].geom1 in rails or d.contact[i].geom2 in rails for i in range(d.ncon))
         if carrying and not expert.suction:  # let go
@@ -251,10 +251,10 @@ def test_the_legs_follow_on_without_a_pause_and_the_carry_leaves_halfway_up_clea
         motion = expert.motion
         if motion is before:
             continue
-        if expert.phase is Phase.TRACK:
+        if expert.phase is TrackingPhase.TRACK:
             tracks += 1
             assert motion.started == pytest.approx(before.end) and now < motion.started <= now + expert.dt + 1e-9
-        elif expert.phase is Phase.MOVE_OVER_BIN:
+        elif expert.phase is TrackingPhase.MOVE_OVER_BIN:
             carries += 1
             path = before.trajectory
             assert isinstance(path, DensePath) and isinstance(motion.trajectory, JointTrajectory)

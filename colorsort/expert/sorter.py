@@ -35,7 +35,7 @@ from colorsort.expert.perception import Detection
 from colorsort.expert.planning import Waypoint
 
 
-class Phase(Enum):
+class SorterPhase(Enum):
     """The stopping-belt expert's phases."""
 
     MOVE_TO_WAIT = "move to wait pose"
@@ -66,17 +66,18 @@ class SortingExpert(Expert):
     ``action = expert.act(obs)`` every step after ``expert.reset(obs)``.
     """
 
-    START = Phase.MOVE_TO_WAIT
-    APPROACH = Phase.APPROACH
-    CLEAR = Phase.CLEAR
-    OVER_BIN = Phase.MOVE_OVER_BIN
+    START = SorterPhase.MOVE_TO_WAIT
+    APPROACH = SorterPhase.APPROACH
+    CLEAR = SorterPhase.CLEAR
+    OVER_BIN = SorterPhase.MOVE_OVER_BIN
 
     def handlers(self) -> dict[Enum, Handler]:
         return {
-            Phase.MOVE_TO_WAIT: self._move_to_wait, Phase.WAIT_FOR_BOX: self._wait_for_box,
-            Phase.LET_THROUGH: self._let_through, Phase.APPROACH: self._approach, Phase.DESCEND: self._descend,
-            Phase.GRIP: self._grip, Phase.BACK_UP: self._back_up, Phase.MOVE_OVER_BIN: self._move_over_bin,
-            Phase.RELEASE: self._release, Phase.CLEAR: self._clear,
+            SorterPhase.MOVE_TO_WAIT: self._move_to_wait, SorterPhase.WAIT_FOR_BOX: self._wait_for_box,
+            SorterPhase.LET_THROUGH: self._let_through, SorterPhase.APPROACH: self._approach,
+            SorterPhase.DESCEND: self._descend, SorterPhase.GRIP: self._grip, SorterPhase.BACK_UP: self._back_up,
+            SorterPhase.MOVE_OVER_BIN: self._move_over_bin, SorterPhase.RELEASE: self._release,
+            SorterPhase.CLEAR: self._clear,
         }
 
     def drop_seed(self) -> np.ndarray:
@@ -98,7 +99,7 @@ class SortingExpert(Expert):
         if self._arrived(q):
             if self.cycles and self.cycles[-1].done_at is None:
                 self.cycles[-1].done_at = self.time  # a cycle ends with the arm ready again
-            self._enter(Phase.WAIT_FOR_BOX)
+            self._enter(SorterPhase.WAIT_FOR_BOX)
             self._wait_for_box(obs, q, goal)  # a box already at the ray is seen in the same step
 
     # 2. wait for a box, look at it
@@ -108,11 +109,11 @@ class SortingExpert(Expert):
         self.target, cycle = self._look(obs)
         if self.target is None or cycle.target_bin is None:
             self.belt_pass = True
-            self._enter(Phase.LET_THROUGH)
+            self._enter(SorterPhase.LET_THROUGH)
             return
         self.pick = self._plan_pick(self.target)
         self._start_motion(goal, self.pick.above, self.config.approach_tolerance)
-        self._enter(Phase.APPROACH)
+        self._enter(SorterPhase.APPROACH)
 
     def _plan_pick(self, t: Detection) -> PickPlan:
         L, cfg = self.layout, self.config
@@ -129,7 +130,7 @@ class SortingExpert(Expert):
         if not ray_blocked(obs):
             self.belt_pass = False
             self.cycles[-1].done_at = self.time
-            self._enter(Phase.WAIT_FOR_BOX)
+            self._enter(SorterPhase.WAIT_FOR_BOX)
 
     # 3. over the box, then suction on and down onto it
     def _approach(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
@@ -137,23 +138,23 @@ class SortingExpert(Expert):
             self.suction = True  # on for the last few centimetres
             assert self.pick is not None, "APPROACH follows a planned pick"
             self._start_motion(goal, self.pick.contact, self.config.approach_tolerance)
-            self._enter(Phase.DESCEND)
+            self._enter(SorterPhase.DESCEND)
 
     def _descend(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._arrived(q):
-            self._enter(Phase.GRIP)
+            self._enter(SorterPhase.GRIP)
 
     # 4. grip: wait for the vacuum switch
     def _grip(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if sealed(obs):
             assert self.pick is not None, "GRIP follows a planned pick"
             self._start_motion(goal, self.pick.lift, self.config.lift_tolerance)
-            self._enter(Phase.BACK_UP)
+            self._enter(SorterPhase.BACK_UP)
         elif self.time - self.phase_started > self.config.grip_timeout:
             self.suction = False  # no seal: back off and look again
             self.cycles.pop()
             self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
-            self._enter(Phase.MOVE_TO_WAIT)
+            self._enter(SorterPhase.MOVE_TO_WAIT)
 
     # 5. back up, then 6. move over the bin of the colour seen
     def _back_up(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
@@ -161,15 +162,15 @@ class SortingExpert(Expert):
             color = self.cycles[-1].target_bin
             assert color is not None, "only a box with a bin is picked"
             self._start_motion(goal, self._next_drop(color), self.config.drop_tolerance)
-            self._enter(Phase.MOVE_OVER_BIN)
+            self._enter(SorterPhase.MOVE_OVER_BIN)
 
     def _move_over_bin(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._arrived(q):
             self.suction = False
-            self._enter(Phase.RELEASE)
+            self._enter(SorterPhase.RELEASE)
 
     # 7. release: wait until the seal is gone and the box has fallen clear
     def _release(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._released(obs):
             self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
-            self._enter(Phase.MOVE_TO_WAIT)
+            self._enter(SorterPhase.MOVE_TO_WAIT)

@@ -33,7 +33,7 @@ from colorsort.expert.perception import wrap_quarter_turn
 from colorsort.expert.planning import JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
 
 
-class Phase(Enum):
+class TrackingPhase(Enum):
     """The tracking expert's phases."""
 
     MOVE_TO_WAIT = "move to wait pose"
@@ -124,15 +124,16 @@ class TrackingExpert(Expert):
         window: (lowest, highest) x [m] over the belt centre line where the cup reaches a box.
     """
 
-    START = Phase.MOVE_TO_WAIT
-    CLEAR = Phase.CLEAR
-    OVER_BIN = Phase.MOVE_OVER_BIN
+    START = TrackingPhase.MOVE_TO_WAIT
+    CLEAR = TrackingPhase.CLEAR
+    OVER_BIN = TrackingPhase.MOVE_OVER_BIN
     current: Sighting | None  # the box being picked (or, after a take-over, carried)
 
     def handlers(self) -> dict[Enum, Handler]:
-        return {Phase.MOVE_TO_WAIT: self._move_to_wait, Phase.WAIT_FOR_BOX: self._wait_for_box,
-                Phase.INTERCEPT: self._intercept, Phase.TRACK: self._track,
-                Phase.MOVE_OVER_BIN: self._move_over_bin, Phase.RELEASE: self._release, Phase.CLEAR: self._clear}
+        return {TrackingPhase.MOVE_TO_WAIT: self._move_to_wait, TrackingPhase.WAIT_FOR_BOX: self._wait_for_box,
+                TrackingPhase.INTERCEPT: self._intercept, TrackingPhase.TRACK: self._track,
+                TrackingPhase.MOVE_OVER_BIN: self._move_over_bin, TrackingPhase.RELEASE: self._release,
+                TrackingPhase.CLEAR: self._clear}
 
     def take_over(self, obs: dict, view: TakeOver = NOTHING_HELD) -> None:
         """``Expert.take_over``; the boxes past the ray, which it would have known from its photos, join the queue
@@ -258,7 +259,7 @@ class TrackingExpert(Expert):
     # 1, 2. to the wait pose and wait, meeting the next box as soon as one can be met
     def _move_to_wait(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if not self._intercept_next() and self._arrived(q):
-            self._enter(Phase.WAIT_FOR_BOX)
+            self._enter(TrackingPhase.WAIT_FOR_BOX)
 
     def _wait_for_box(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         self._intercept_next()
@@ -273,7 +274,7 @@ class TrackingExpert(Expert):
                 self.current = s
                 approach, self._track_plan = plan
                 self._follow(approach, np.inf)
-                self._enter(Phase.INTERCEPT)
+                self._enter(TrackingPhase.INTERCEPT)
                 return True
             self.queue.pop(0)
             s.cycle.target_bin, s.cycle.done_at = None, self.time
@@ -341,7 +342,7 @@ class TrackingExpert(Expert):
         if self.motion.done(self.time + self.dt):  # it ends before the next command: the track follows on at once
             self.suction = True
             self._follow(self._track_plan, np.inf, started=self.motion.end)
-            self._enter(Phase.TRACK)
+            self._enter(TrackingPhase.TRACK)
 
     def _track(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         assert self.motion is not None and self.current is not None, "TRACK follows an interception"
@@ -356,20 +357,20 @@ class TrackingExpert(Expert):
             q, _, _ = path.sample(self.carry_from)
             trajectory = plan_motion(q, self._next_drop(color), self.limits, start_velocity=path.slope(self.carry_from))
             self._follow(trajectory, self.config.drop_tolerance, started=leave_at)
-            self._enter(Phase.MOVE_OVER_BIN)
+            self._enter(TrackingPhase.MOVE_OVER_BIN)
         else:  # no seal: the box rides on
             self.suction = False
             self.current.cycle.target_bin, self.current.cycle.done_at = None, self.time
             self.current = None
             self.let_go += 1
             self._start_from_here(self.q_wait, self.config.wait_tolerance)
-            self._enter(Phase.MOVE_TO_WAIT)
+            self._enter(TrackingPhase.MOVE_TO_WAIT)
 
     def _move_over_bin(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._arrived(q):
             self.suction = False
             if self.config.release_time > 0.0:
-                self._enter(Phase.RELEASE)
+                self._enter(TrackingPhase.RELEASE)
             else:  # the seal breaks in the coming physics step: the cup leaves at once, the box falls free
                 self._leave_bin(goal)
 
@@ -384,10 +385,10 @@ class TrackingExpert(Expert):
         if self._intercept_next():  # straight to the next box when one can be met
             return
         if self.config.wait_over_bin:
-            self._enter(Phase.WAIT_FOR_BOX)
+            self._enter(TrackingPhase.WAIT_FOR_BOX)
         else:
             self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
-            self._enter(Phase.MOVE_TO_WAIT)
+            self._enter(TrackingPhase.MOVE_TO_WAIT)
 
     def _start_from_here(self, goal: np.ndarray, tolerance: float) -> None:
         ref, vel, acc = self._current_state()
