@@ -1,6 +1,7 @@
 """The package installs without -e: the wheel carries the MJCF assets, and they load from it."""
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -77,11 +78,17 @@ def plain_shell() -> dict[str, str]:
       "--batch-sizes", "1,2"], "same outcome"),
 ], ids=["bench_env", "bench_eval"])
 def test_a_benchmark_script_runs_from_a_plain_shell(argv, printed):
-    """docs/speed.md's commands with no MUJOCO_GL or HF_HUB_OFFLINE set: each script sets what it needs first."""
+    """docs/speed.md's commands with no MUJOCO_GL or HF_HUB_OFFLINE set: each script sets what it needs first, and
+    what it prints is measured (the env's ratio to raw MuJoCo; the expert's episodes the same at both sizes)."""
     env = {k: v for k, v in plain_shell().items() if k != "HF_HUB_OFFLINE"}
     proc = subprocess.run([sys.executable, *argv], capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert printed in proc.stdout
+    if "bench_env" in argv[0]:
+        ratio = float(re.search(r"^env / raw +([\d.]+)", proc.stdout, flags=re.M)[1])
+        assert 0.05 < ratio < 1.5
+    else:
+        assert len(re.findall(r" 2/2 +100% ", proc.stdout)) == 2  # every episode the same, and sorted
 
 
 def test_mujoco_imported_before_colorsort_gets_a_message_naming_the_backend_it_loaded(tmp_path):

@@ -213,10 +213,10 @@ def run_lockstep_job(job: EvalJob, ctx: TaskContext) -> int:
 
 
 def run_jobs(tasks: list[tuple[str, Callable, Any]], episodes: int, executor: ExecutorConfig, progress: bool,
-             desc: str, on_message: Callable[[Any], None] | None = None) -> list:
-    """Run ``(key, function, job)`` tasks on ``executor`` with a progress bar of ``episodes`` (each task sends one
-    message an episode, which ``on_message`` is also given as it arrives); each task's value in order (None for
-    a task a stop kept from starting).
+             desc: str, on_message: Callable[[Any], None] | None = None) -> None:
+    """Run ``(key, function, job)`` tasks on ``executor`` with a progress bar of ``episodes``: each task sends one
+    message an episode, which ``on_message`` is given as it arrives (what a task finished reaches the caller so,
+    whether it returns or is stopped).
 
     Raises:
         StageError: a task failed (its traceback).
@@ -234,7 +234,6 @@ def run_jobs(tasks: list[tuple[str, Callable, Any]], episodes: int, executor: Ex
     failed = [r for r in results if r.error is not None]
     if failed:
         raise StageError("evaluation stopped: " + "; ".join(str(r.error) for r in failed))
-    return [r.value for r in results]
 
 
 def run_episodes(work: list[tuple[EvalConfig, list[EpisodePlan]]], executor: ExecutorConfig, shard_size: int,

@@ -160,6 +160,7 @@ class BatchedPolicy:
         self.generator = torch.Generator(device=self.device).manual_seed(seed)
         torch.manual_seed(seed)
         self.world_generators: dict[int, Any] = {}
+        self.steps = 0  # control steps since the reset: a chunk is predicted every n_action_steps of them
         if self.policy is not None:
             self.policy.reset()
 
@@ -187,17 +188,18 @@ class BatchedPolicy:
                     else contextlib.nullcontext())
         with torch.inference_mode(), autocast:
             action = self.policy.select_action(self.preprocessor(batch), **self._noise(n))
+        self.steps += 1
         return self.postprocessor(action.float())
 
     def _noise(self, n: int) -> dict[str, Any]:
-        """Diffusion Policy's starting noise for the chunk it is about to predict, each world's from its own
-        generator (``begin``); nothing for a policy that draws none, or between chunks."""
+        """Diffusion Policy's starting noise for the chunk it predicts at this step (every ``n_action_steps`` from
+        the reset), each world's from its own generator (``begin``); nothing for a policy that draws none, or
+        between chunks."""
         import torch
 
         assert self.policy is not None
         config = self.policy.config
-        queue = getattr(self.policy, "_queues", None)
-        if config.type != "diffusion" or queue is None or len(queue["action"]) > 0:
+        if config.type != "diffusion" or self.steps % config.n_action_steps:
             return {}
         shape = (config.horizon, config.action_feature.shape[0])
         idle = torch.Generator(device=self.device).manual_seed(0)  # a world with no episode: never counted

@@ -205,6 +205,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.sweep.run:
         return sweep(args, argv, cameras, image_size, executor)
     film = report.dir is not None and report.videos != 0
+    journal = None
     if args.backend == "warp":
         try:
             from colorsort.batched.evaluate import evaluate_batched
@@ -228,16 +229,15 @@ def main(argv: list[str] | None = None) -> int:
     reports = evaluation.reports
     print(format_report(reports[0]) if args.variant != "all" else f"policy {args.policy}\n" + format_table(reports))
     if args.backend == "cpu":
-        forward = f"; policy forward in {args.precision}" if args.policy not in ("expert", "random") else ""
-        print(f"cells: {executor.workers} {executor.name} worker(s) x {args.batch_size} stepped together{forward}")
+        print(f"cells: {executor.workers} {executor.name} worker(s) x {cells_stepped(args)}")
     found = [{**asdict(r), "batch_size": args.batch_size, "precision": args.precision} for r in reports]
     payload = found if args.variant == "all" else found[0]
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(payload, indent=1))
         print(f"metrics: {args.json}")
-        if args.backend == "cpu":
-            journal_path(args.json).unlink(missing_ok=True)  # the JSON is written: the journal has served
+        if journal is not None:
+            journal.finish()
     if report.dir:
         if report.overwrite:
             shutil.rmtree(report.dir, ignore_errors=True)
@@ -282,10 +282,9 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
     rows = sweep_rows(reports)
     print(format_sweep(args.policy, args.variant, rows))
     resumed = f" (and {reused} from the journal)" if reused else ""
-    cells = f", {args.batch_size} cells each" if args.batch_size > 1 else ""
-    forward = f"; forward in {args.precision}" if args.policy not in ("expert", "random") else ""
+    looped = args.policy in ("expert", "random") and args.batch_size == 1
     print(f"{len(wanted) - reused} episodes in {wall / 60:.1f} min{resumed} ({executor.name}, {executor.workers} envs"
-          f"{cells}{forward})")
+          f"{'' if looped else ' x ' + cells_stepped(args)})")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         payload = {"policy": args.policy, "variant": args.variant, "seeds": list(SHIFT_SEEDS[: args.episodes]),
@@ -300,6 +299,14 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
         if journal is not None:
             journal.finish()
     return 0
+
+
+def cells_stepped(args: EvalCommandConfig) -> str:
+    """What each worker steps: ``N stepped together`` and the forward's precision, or for the expert and ``random``
+    (no forward to share) one env, whatever ``--batch-size``."""
+    if args.policy in ("expert", "random"):
+        return "1 env (the expert and random have no forward to share)"
+    return f"{args.batch_size} stepped together; policy forward in {args.precision}"
 
 
 def open_journal(args: EvalCommandConfig, cameras: tuple[str, ...], image_size: tuple[int, int],
