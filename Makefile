@@ -62,6 +62,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_env.py
 	$(VENV)/bin/python benchmarks/bench_profile.py
 	$(VENV)/bin/python benchmarks/bench_perception.py --views 1000
+	$(VENV)/bin/python benchmarks/bench_colours.py
 	$(VENV)/bin/python benchmarks/bench_seal.py
 	$(VENV)/bin/python benchmarks/bench_sort.py --preset default --seeds 10 --boxes 20 --workers 2
 	$(VENV)/bin/python benchmarks/bench_sort.py --preset seed --seeds 3 --boxes 4
@@ -71,8 +72,8 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_bound.py
 	$(VENV)/bin/python benchmarks/bench_bound.py --acceleration 15 --jerk 150
 	$(VENV)/bin/python benchmarks/bench_bound.py --jerk 5000
-	$(VENV)/bin/python benchmarks/bench_bound.py --descend 0.15 --lift 0.12
-	$(VENV)/bin/python benchmarks/bench_bound.py --descend 0.3 --lift 0.25
+	$(VENV)/bin/python benchmarks/bench_bound.py --touch-speed 0.12 --lift 0.12
+	$(VENV)/bin/python benchmarks/bench_bound.py --touch-speed 0.24
 	$(VENV)/bin/python benchmarks/bench_bound.py --drop-slots 4
 	$(VENV)/bin/python benchmarks/bench_bound.py --drop-slots 4 --wait-at-wait-pose
 	$(VENV)/bin/python benchmarks/soak.py --preset tracking-fast --boxes 2000

@@ -1,7 +1,7 @@
 """The tracking expert's cycle against the physical bound: the arm's joint speeds and the cell's geometry.
 
     python benchmarks/bench_bound.py [--preset tracking-fast] [--seeds 10] [--boxes 20] [--jerk 150] [--acceleration 15]
-        [--descend 0.1] [--lift 0.08] [--drop-slots 2] [--wait-at-wait-pose]
+        [--touch-speed 0.16] [--lift 0.08] [--drop-slots 2] [--wait-at-wait-pose]
 
 Prints, per bin and leg, the shortest cycle (``studies.cycle_bound``: the box met at the best point
 of the reach window) four ways: three bounds (each leg at the datasheet joint speeds, acceleration
@@ -27,7 +27,7 @@ import argparse
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from studies.cycle_bound import LEGS, MODES, Cycle, commanded_peaks, shortest_cycle, waiting_time
+from studies.cycle_bound import LEGS, MODES, Cycle, commanded_peaks, shortest_cycle, touch_cost, waiting_time
 
 from colorsort.cell.referee import Outcome
 from colorsort.config import BIN_COLORS, make_config, sorting_time_limit
@@ -41,7 +41,8 @@ from colorsort.results import recorded
 # the expert's phases that a cycle needs: the way back from the bin counts whether it heads for the next box or,
 # none being within reach yet, for the wait pose at the upstream end of the reach window, where boxes come in
 # (an expert that waits over the bin instead meets the next box from there: its interception is the way back)
-ACTIVE = tuple(p.value for p in (TrackingPhase.INTERCEPT, TrackingPhase.TRACK, TrackingPhase.MOVE_OVER_BIN,
+ACTIVE = tuple(p.value for p in (TrackingPhase.INTERCEPT, TrackingPhase.TRACK, TrackingPhase.LIFT,
+                                 TrackingPhase.MOVE_OVER_BIN,
                                  TrackingPhase.RELEASE, TrackingPhase.MOVE_TO_WAIT))
 
 
@@ -58,8 +59,8 @@ def main() -> None:
     p.add_argument("--acceleration", type=float, default=TRACKING_EXPERT.motion.acceleration,
                    help="the expert's joint acceleration limit [rad/s^2], every joint, as --jerk (by default its "
                         "preset's: each joint's own torque-limited acceleration)")
-    p.add_argument("--descend", type=float, default=TRACKING_EXPERT.track_descend_time,
-                   help="the expert's time down onto the moving box [s] (its preset's by default)")
+    p.add_argument("--touch-speed", type=float, default=TRACKING_EXPERT.touch_speed,
+                   help="the expert's guarded descent onto the moving box [m/s] (its preset's by default)")
     p.add_argument("--lift", type=float, default=TRACKING_EXPERT.track_lift_time,
                    help="the expert's time lifting the box off the moving belt [s] (its preset's by default)")
     p.add_argument("--drop-slots", type=int, default=TRACKING_EXPERT.drop_slots,
@@ -67,7 +68,7 @@ def main() -> None:
     p.add_argument("--wait-at-wait-pose", action="store_true",
                    help="after a release with no box within reach, wait at the wait pose, not over the bin")
     args = p.parse_args()
-    config = replace(TRACKING_EXPERT, track_descend_time=args.descend, track_lift_time=args.lift,
+    config = replace(TRACKING_EXPERT, touch_speed=args.touch_speed, track_lift_time=args.lift,
                      drop_slots=args.drop_slots, wait_over_bin=not args.wait_at_wait_pose,
                      motion=replace(TRACKING_EXPERT.motion, acceleration=args.acceleration, jerk=args.jerk))
 
@@ -92,6 +93,9 @@ def main() -> None:
     for leg in LEGS:
         print(f"| {leg} | " + " | ".join(f"{cycles[mode][c].legs[leg]:.3f}" for mode, c in columns) + " |")
     print("| all | " + " | ".join(f"{cycles[mode][c].total:.3f}" for mode, c in columns) + " |")
+    print(f"the touch-off (from {expert.descent.start:.2f} m, over the tallest box the cell accepts, down at "
+          f"{config.touch_speed:g} m/s) onto a 10 cm box takes longer than the leg down onto it by: " + ", ".join(
+              f"{mode} {touch_cost(expert, cycles[mode]['green']):.3f} s" for mode in MODES) + " (green)")
     mean = {mode: sum(c.total for c in cycles[mode].values()) / len(BIN_COLORS) for mode in MODES}
 
     totals = Tally()

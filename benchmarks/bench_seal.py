@@ -3,8 +3,8 @@
     python benchmarks/bench_seal.py --speeds 0.02,0.05,0.1,0.2,0.3,0.5
 
 For each relative speed v [m/s] the belt (a tracking belt, which never stops) runs at v and the
-cup, held still over the belt, comes down onto a box as the tracking expert does (its heights,
-``track_heights``: down 4.3 cm in 0.2 s with suction on, 0.05 s on the box, up until the box's
+cup, held still over the belt, comes down onto a box as the tracking expert of version 1 did
+(``studies/seal_trial.dip_heights``: down 4.3 cm in 0.2 s with suction on, 0.05 s on the box, up until the box's
 bottom is 5 cm over the belt in 0.15 s), the box timed to arrive under it as the pad lands.
 Printed per speed: whether the vacuum sealed, whether the box came up with the cup, the box's
 offset from the cup's axis once lifted [mm] and its tilt [deg].

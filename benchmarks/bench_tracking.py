@@ -24,12 +24,14 @@ from multiprocessing import get_context
 import numpy as np
 
 from colorsort.config import PRESETS
+from colorsort.expert.sorter import SorterPhase
+from colorsort.expert.tracking import TrackingPhase
 from colorsort.results import recorded
 from colorsort.robots import ROBOTS
 
 PRESETS_COMPARED = ("default", "tracking", "tracking-fast")
-PHASES = ("wait for box", "move to wait pose", "approach box", "descend", "grip", "intercept box", "track box",
-          "back up", "move over bin", "release", "let box through")
+# both experts' phases, in the order of a pick (a name both have is one row)
+PHASES = tuple(dict.fromkeys(p.value for phases in (SorterPhase, TrackingPhase) for p in phases))
 
 
 def run_one(preset: str, robot: str, boxes: int, seed: int) -> tuple[str, int, dict, float]:

@@ -47,9 +47,10 @@ class CellLayout:
     belt_width: float = 0.25
     belt_top_z: float = 0.40  # height of the belt's carrying surface
     sensor_x: float = 0.35  # the ray across the belt; a box stops with its leading face here
-    sensor_height: float = 0.05  # ray height above the belt surface
+    sensor_height: float = 0.04  # ray height above the belt surface: under the top of the lowest box the cell accepts
     spawn_x: float = 1.22  # box centre at spawn
     box_size: float = 0.10  # cube edge
+    tallest_box: float = 0.15  # [m] the tallest box the cell accepts: the expert's touch-off starts over it
     bin_x: float = 0.42  # bin centres
     bin_y0: float = -0.05  # red bin centre; green and blue follow at +bin_spacing
     bin_spacing: float = 0.325
@@ -66,6 +67,11 @@ class CellLayout:
         """Centre of a box's top face when it stops at the sensor."""
         half = self.box_size / 2
         return (self.sensor_x + half, self.belt_y, self.belt_top_z + self.box_size)
+
+    @property
+    def shortest_box(self) -> float:
+        """[m] the lowest box the cell accepts: the ray's height (a lower one rides under it unseen)."""
+        return self.sensor_height
 
     def bin_center(self, index: int) -> tuple[float, float]:
         """(x, y) of bin ``index`` (0 = red, 1 = green, 2 = blue)."""

@@ -9,7 +9,7 @@ expert's; a sweep's journal of finished episodes holds them too (``colorsort.ben
 
 from __future__ import annotations
 
-EXPERT = 1  # colorsort/expert: the scripted demonstrator's actions, from what it sees
+EXPERT = 2  # colorsort/expert: the scripted demonstrator's actions, from what it sees (2: the touch-off)
 CELL = 1  # colorsort/cell: physics, the belt, the seal, the referee, the box stream, rendering
 RECORDER = 1  # colorsort/data: what a recorded frame and a dataset's metadata hold
 SHIFTS = 1  # colorsort/shifts: what each held-out shift draws and changes at each level

@@ -129,8 +129,8 @@ def test_the_experts_changed_settings_are_a_setting_of_the_data(tiny_dataset, tm
     and checked on resume; a name it cannot change or a value out of range is refused naming the valid ones."""
     deeper = CollectConfig(**TINY, preset="tracking", expert=(("press", 0.01), ("track_hold_time", 0.15)))
     assert (deeper.expert_config.press, deeper.expert_config.track_hold_time) == (0.01, 0.15)
-    assert deeper.expert_config.track_descend_time == CollectConfig(**TINY, preset="tracking").expert_config \
-        .track_descend_time  # the rest is the tracking belt's preset
+    assert deeper.expert_config.touch_speed == CollectConfig(**TINY, preset="tracking").expert_config \
+        .touch_speed  # the rest is the tracking belt's preset
     assert deeper.settings()["expert"] == [["press", 0.01], ["track_hold_time", 0.15]]
     assert "expert" not in CollectConfig(**TINY).settings()
     copy = tmp_path / "copy"

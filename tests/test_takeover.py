@@ -215,7 +215,7 @@ def test_the_expert_that_takes_over_is_the_one_that_made_the_demos():
 
     deeper = TakeoverConfig(policy="p", out="o", variant="tracking-jitter", expert=(("press", 0.01),))
     assert deeper.expert_config.press == 0.01
-    assert deeper.expert_config.track_descend_time == TRACKING_EXPERT.track_descend_time
+    assert deeper.expert_config.touch_speed == TRACKING_EXPERT.touch_speed
     assert TakeoverConfig(policy="p", out="o", variant="tracking").expert_config == TRACKING_EXPERT
     with pytest.raises(ValueError, match="valid names: .*'press'"):
         TakeoverConfig(policy="p", out="o", expert=(("hold", 0.15),))

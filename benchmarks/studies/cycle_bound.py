@@ -1,8 +1,9 @@
 """The shortest cycle of a pick on the tracking belt, from the arm's limits and the cell's geometry.
 
-For a box at ``x`` on the belt's centre line and a bin, a cycle is six legs: down onto the box, the
-seal (one control period: the vacuum switch reports it at the next step), the lift (as high as the
-expert lifts before its carry takes over: ``tracking.carry_height``), the carry to the bin's first
+For a 10 cm box at ``x`` on the belt's centre line and a bin, a cycle is six legs: down onto the box
+from where the expert's touch-off starts (over the tallest box the cell accepts), the seal (one control
+period: the vacuum switch reports it at the next step), the lift (as high as the expert lifts before its
+carry takes over: ``tracking.carry_height``), the carry to the bin's first
 drop slot, the release (one control period), and the way back over the next box at the same ``x``.
 Each motion leg takes, between its two joint configurations (mink IK of the cup poses):
 
@@ -23,7 +24,8 @@ Each motion leg takes, between its two joint configurations (mink IK of the cup 
   and the expert's acceleration and jerk. An expert that blends legs (it meets a moving box already
   moving and carries from the moving state) can beat it.
 
-``shortest_cycle`` takes the best ``x`` in the arm's reach window.
+``shortest_cycle`` takes the best ``x`` in the arm's reach window. What the expert's guarded descent costs beyond
+the arm's limits is ``touch_cost``.
 """
 
 from __future__ import annotations
@@ -104,8 +106,7 @@ def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") 
     L, cfg = expert.layout, expert.config
     top = L.belt_top_z + L.box_size
     over, on, lift = (Waypoint(name, (x, L.belt_y, z), expert.cup_yaw) for name, z in (
-        ("over the box", top + cfg.approach_gap), ("on the box", top - cfg.press),
-        ("lifted", carry_height(cfg, L))))
+        ("over the box", expert.descent.start), ("on the box", top), ("lifted", top + carry_height(cfg))))
     q_over = expert.ik.solve(over, expert.q_wait)
     q_on = expert.ik.solve(on, q_over)
     q_lift = expert.ik.solve(lift, q_on)
@@ -125,6 +126,14 @@ def cycle_at(expert: TrackingExpert, x: float, color: str, mode: str = "speed") 
     legs = dict(zip(LEGS, (move(q_over, q_on), expert.dt, move(q_on, q_lift), move(q_lift, q_drop), expert.dt,
                            move(q_drop, q_over)), strict=True))
     return Cycle(x, color, legs)
+
+
+def touch_cost(expert: TrackingExpert, cycle: Cycle) -> float:
+    """[s] how much longer the expert's guarded descent onto a 10 cm box takes (at ``touch_speed``) than ``cycle``'s
+    leg down onto it: the price of not knowing the box's height."""
+    L = expert.layout
+    guarded = (expert.descent.start - L.belt_top_z - L.box_size) / expert.config.touch_speed
+    return max(guarded - cycle.legs["down onto the box"], 0.0)
 
 
 def shortest_cycle(expert: TrackingExpert, color: str, mode: str = "speed", step: float = 0.01) -> Cycle:

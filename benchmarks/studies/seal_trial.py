@@ -1,7 +1,7 @@
 """A seal trial: how fast may a box move under the cup and still be sealed and lifted? Measured, not assumed.
 
 For a relative speed v [m/s] the belt (a tracking belt, which never stops) runs at v and the cup, held still
-over the belt, comes down onto a box as the tracking expert does (its heights, ``track_heights``: down 4.3 cm
+over the belt, comes down onto a box as the tracking expert of version 1 did (``dip_heights``: down 4.3 cm
 in 0.2 s with suction on, 0.05 s on the box, up until the box's bottom is 5 cm over the belt in 0.15 s), the
 box timed to arrive under it as the pad lands. ``trial`` says whether the vacuum sealed, whether the box came
 up with the cup, the box's offset from the cup's axis once lifted [mm] and its tilt [deg]. The tracking expert
@@ -13,11 +13,25 @@ from __future__ import annotations
 
 import numpy as np
 
+from colorsort.config import CellLayout
 from colorsort.envs.robosuite_task import ColorSort
 from colorsort.expert.calibration import Calibration
 from colorsort.expert.config import ExpertConfig
-from colorsort.expert.planning import CupIK, Waypoint, site_yaw
-from colorsort.expert.tracking import DensePath, smoothstep, track_heights
+from colorsort.expert.planning import CupIK, DensePath, Waypoint, site_yaw
+from colorsort.expert.tracking import smoothstep
+
+DESCEND, HOLD, LIFT = 0.2, 0.05, 0.15  # [s]
+
+
+def dip_heights(layout: CellLayout, dt: float) -> np.ndarray:
+    """Cup heights [m], one per control period ``dt`` [s]: from 4 cm over a 10 cm box's top down 3 mm into it in
+    ``DESCEND``, held ``HOLD``, then up until the box's bottom is 5 cm over the belt in ``LIFT``."""
+    top = layout.belt_top_z + layout.box_size
+    z_over, z_on, z_up = top + 0.04, top - 0.003, top + 0.05
+    tau = dt * np.arange(int(np.ceil((DESCEND + HOLD + LIFT) / dt)) + 1)
+    down = z_over + (z_on - z_over) * np.array([smoothstep(u) for u in tau / DESCEND])
+    up = z_on + (z_up - z_on) * np.array([smoothstep(u) for u in (tau - DESCEND - HOLD) / LIFT])
+    return np.where(tau <= DESCEND, down, up)
 
 
 def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
@@ -31,7 +45,7 @@ def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
     cal = Calibration.from_env(env, (cfg.sensor_image_size,) * 2)
     ik = CupIK(cal.kinematics, cal.home)
     yaw = site_yaw(ik.cup_pose(cal.home)[1])
-    heights = track_heights(cfg, L, dt)  # the tracking expert's, with the cup held still over x_cup
+    heights = dip_heights(L, dt)  # with the cup held still over x_cup
     q_over = ik.solve(Waypoint("over", (x_cup, L.belt_y, heights[0]), yaw), cal.home)
     for k in range(40):  # 2 s: to the pose over the belt, and settle
         s = smoothstep(min(1.0, k / 30))
@@ -41,7 +55,7 @@ def trial(speed: float, robot: str = "IRB140", x_cup: float = 0.42) -> dict:
         q = ik.solve(Waypoint("down and up", (x_cup, L.belt_y, z), yaw), q)
         joints.append(q)
     path = DensePath(np.array(joints), dt)
-    box = env.put_box("red", x_cup + speed * cfg.track_descend_time, L.belt_y)  # under the cup as the pad lands
+    box = env.put_box("red", x_cup + speed * DESCEND, L.belt_y)  # under the cup as the pad lands
     obs = env.observe()
     sealed = False
     for k in range(len(heights) + 10):

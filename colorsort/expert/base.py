@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
+from functools import cached_property
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from colorsort.expert.planning import (
     plan_motion,
     site_yaw,
 )
+from colorsort.expert.touch import Descent
 
 Handler = Callable[[dict, np.ndarray, np.ndarray], None]  # (observation, joints now [rad], motion goal [rad])
 
@@ -156,6 +158,7 @@ class Expert:
         self.drops = {c: 0 for c in BIN_COLORS}
         self.cycles: list[Cycle] = []
         self.carrying: Cycle | None = None  # a take-over's held box, until the lift ends
+        self.misses: list[tuple[float, str]] = []  # (expert time [s], why) of each pick it gave up
         self._q_cmd = np.array(obs["robot0_joint_pos"], float) if obs is not None else self.home.copy()
         self._start_motion(self._q_cmd, self.q_wait, self.config.wait_tolerance)
 
@@ -184,6 +187,11 @@ class Expert:
             self.suction = True
         self._start_motion(self._q_cmd, self._lifted(self._q_cmd), self.config.lift_tolerance)
         self._enter(self.CLEAR)
+
+    @cached_property
+    def descent(self) -> Descent:
+        """The touch-off's heights [m], from the tallest and the lowest box the cell accepts."""
+        return Descent.of(self.layout, self.config.touch_clearance, self.config.touch_floor)
 
     def _lifted(self, q: np.ndarray) -> np.ndarray:
         """Joint angles [rad] with the cup straight above where it is now at the carry height, facing down with its
@@ -253,6 +261,17 @@ class Expert:
         """Follow ``trajectory`` from expert time ``started`` [s] (now by default)."""
         self.motion = Motion(trajectory, self.time if started is None else started, tolerance)
 
+    def _current_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The commanded reference now: position [rad], velocity [rad/s], acceleration [rad/s^2]."""
+        if self.motion is None:
+            return self._q_cmd, np.zeros_like(self._q_cmd), np.zeros_like(self._q_cmd)
+        return self.motion.sample(self.time)
+
+    def _start_from_here(self, goal: np.ndarray, tolerance: float) -> None:
+        """A jerk-limited motion to rest at ``goal`` [rad] from the reference's state now (moving or not)."""
+        ref, vel, acc = self._current_state()
+        self._follow(plan_motion(ref, goal, self.limits, start_velocity=vel, start_acceleration=acc), tolerance)
+
     def _arrived(self, q: np.ndarray) -> bool:
         return self.motion is None or self.motion.arrived(q, self.time)
 
@@ -283,13 +302,13 @@ class Expert:
     def _drop_slots(self, color: str, index: int) -> list[np.ndarray]:
         """Joint angles of up to ``drop_slots`` release points over a bin, the least ``slot_cost`` first.
 
-        Candidates lie on a grid inside the bin, far enough from its walls for a box of any yaw, spanning
-        ``drop_spread`` of that room about the bin's centre; those the arm cannot reach are skipped (the Panda
+        Candidates lie on a grid inside the bin, far enough from its walls for the largest box the cell accepts,
+        spanning ``drop_spread`` of that room about the bin's centre; those the arm cannot reach are skipped (the Panda
         reaches less far than the IRB 140).
         """
         L, cfg = self.layout, self.config
         bx, by = L.bin_center(index)
-        margin = L.box_size / 2 + 0.01 + L.bin_wall  # an axis-aligned box 1 cm clear of the walls
+        margin = L.tallest_box / 2 + 0.01 + L.bin_wall  # the widest box the cell accepts, axis-aligned, 1 cm clear
         hx, hy = (cfg.drop_spread * (L.bin_size[k] / 2 - margin) for k in (0, 1))
         z = L.bin_size[2] + cfg.drop_clearance + L.box_size
         grid = [(bx + dx, by + dy) for dx in np.linspace(-hx, hx, 4) for dy in np.linspace(-hy, hy, 3)]

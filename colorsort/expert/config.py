@@ -19,8 +19,12 @@ class ExpertConfig:
         motion: joint speed, acceleration and jerk limits.
         perception: the colour sensor's thresholds.
         carry_z: [m] cup height while carrying: the box bottom clears the belt rails by 8 cm.
-        approach_gap: [m] cup above the box's top face before the final descent.
-        press: [m] the cup's target lies this far below the top face, so the pad seats firmly.
+        touch_clearance: [m] the touch-off (``touch.py``) starts this far over the tallest box the cell accepts.
+        touch_speed: [m/s] the touch-off's guarded descent: the reference runs on at most this times the control
+            period past the touch before it stops.
+        touch_floor: [m] the touch-off gives up this far under the top of the lowest box the cell accepts.
+        press: [m] on a tracking belt, the cup goes on down this far past the seal before it holds and lifts (a
+            deliberate dip; 0: it lifts from where the seal formed).
         drop_clearance: [m] box bottom above a bin's rim at release.
         wait_offset_y: [m] the wait pose lies this far from the belt centre, toward the bins (out of view).
         drop_slots: release points per bin, used in turn so that boxes do not pile up.
@@ -31,12 +35,10 @@ class ExpertConfig:
         approach_tolerance: [rad] the same over the box and on it (the cup must sit flat).
         lift_tolerance: [rad] the same at the top of the lift.
         drop_tolerance: [rad] the same over a bin.
-        grip_timeout: [s] time to wait for a seal before backing off and looking again.
         release_time: [s] time after the seal is gone before moving on (the box falls clear).
         sensor_image_size: [px] side of the photo the expert takes when the ray fires (its own, whatever
             cameras the env renders).
-        track_descend_time: [s] on a tracking belt, from over the moving box down onto it.
-        track_hold_time: [s] then on it, while the seal forms.
+        track_hold_time: [s] on a tracking belt, on the box after the seal (and the ``press``) before the lift.
         track_lift_time: [s] then up until the box's bottom is ``track_lift_gap`` over the belt, still moving
             with it; the carry to its bin leaves on the way (``track_carry_at``).
         track_lift_gap: [m] the box's bottom over the belt at the top of the lift (the rails stand 2 cm high).
@@ -58,7 +60,10 @@ class ExpertConfig:
     perception: PerceptionConfig = field(default_factory=PerceptionConfig)
     carry_z: float = 0.60
     approach_gap: float = 0.04
-    press: float = 0.003
+    touch_clearance: float = 0.01
+    touch_speed: float = 0.12
+    touch_floor: float = 0.01
+    press: float = 0.0
     drop_clearance: float = 0.12
     wait_offset_y: float = 0.205
     drop_slots: int = 4
@@ -67,11 +72,9 @@ class ExpertConfig:
     approach_tolerance: float = 0.01
     lift_tolerance: float = 0.05
     drop_tolerance: float = 0.03
-    grip_timeout: float = 1.0
     release_time: float = 0.15
     sensor_image_size: int = 128
-    track_descend_time: float = 0.20
-    track_hold_time: float = 0.05
+    track_hold_time: float = 0.0
     track_lift_time: float = 0.15
     track_lift_gap: float = 0.05
     track_carry_at: float = 1.0
@@ -82,18 +85,20 @@ class ExpertConfig:
     def __post_init__(self) -> None:
         check_range("carry_z", self.carry_z, 0.4, 1.2)
         check_range("approach_gap", self.approach_gap, 0.0, 0.2)
-        check_range("press", self.press, 0.0, 0.02)
+        check_range("touch_clearance", self.touch_clearance, 0.0, 0.1)
+        check_range("touch_speed", self.touch_speed, 0.01, 0.5)
+        check_range("touch_floor", self.touch_floor, 0.0, 0.04)
         check_range("drop_clearance", self.drop_clearance, 0.0, 0.5)
         check_range("wait_offset_y", self.wait_offset_y, 0.0, 0.5)
         check_range("drop_slots", self.drop_slots, 1, 12)
         check_range("drop_spread", self.drop_spread, 0.0, 1.0)
         for name in ("wait_tolerance", "approach_tolerance", "lift_tolerance", "drop_tolerance"):
             check_range(name, getattr(self, name), 0.001, 0.5)
-        check_range("grip_timeout", self.grip_timeout, 0.05, 10.0)
         check_range("release_time", self.release_time, 0.0, 5.0)
         check_range("sensor_image_size", self.sensor_image_size, 16, 1024)
-        for name in ("track_descend_time", "track_hold_time", "track_lift_time"):
-            check_range(name, getattr(self, name), 0.05, 2.0)
+        check_range("press", self.press, 0.0, 0.02)
+        check_range("track_hold_time", self.track_hold_time, 0.0, 2.0)
+        check_range("track_lift_time", self.track_lift_time, 0.05, 2.0)
         check_range("track_lift_gap", self.track_lift_gap, 0.03, 0.3)
         check_range("track_carry_at", self.track_carry_at, 0.5, 1.0)
 
@@ -101,14 +106,14 @@ class ExpertConfig:
 STOPPING_EXPERT = ExpertConfig()
 # On the never-stopping belt every tenth of a second of the cycle counts (tracking-fast brings a box every
 # 2 s): the cup leaves the bin as soon as the seal is gone (the box falls free of a cup moving up and
-# away), it follows the box down and up faster (benchmarks/bench_tracking.py measures the result), and the
+# away), it lifts the box faster (benchmarks/bench_tracking.py measures the result), and the
 # carry takes over halfway up, where the lift's acceleration passes through zero as ruckig's starts. It plans
 # at each joint's own acceleration (its maker's, else what its motor gives it: expert/limits.py) and leads its
 # targets by the planned acceleration too, so the arm keeps up with such plans. After a release with no box yet
 # within reach it waits over the bin, and it drops into each bin's two quickest slots (a bin holds at most three
 # boxes between emptyings, so two at most land on one spot; benchmarks/soak.py places 2,000 of 2,000).
 TRACKING_EXPERT = ExpertConfig(motion=MotionConfig(acceleration=None, jerk=1500.0), release_time=0.0,
-                               track_descend_time=0.10, track_lift_time=0.08, track_carry_at=0.5,
+                               touch_speed=0.16, track_lift_time=0.08, track_carry_at=0.5,
                                feed_forward_acceleration=True, wait_over_bin=True, drop_slots=2)
 
 

@@ -3,11 +3,12 @@
 Only the image, the camera's calibration (intrinsics and pose) and the cell's nominal geometry
 are used; never the simulator's geom colours or poses. The pipeline:
 
-1. blur (sensor noise), convert to HSV with a full 0-360 deg hue circle;
+1. blur (sensor noise), undo a change of light measured on the rails and the belt (``colour_classes.py``);
 2. keep saturated, not-too-dark pixels inside the belt's region of interest: the belt is dark
-   grey and the rails light grey, so only boxes survive; shadows and dim light lower V, not hue;
-3. label each pixel by the nearest reference hue of the configured colours (within a tolerance;
-   anything else is "other"), so that touching boxes of different colours come apart;
+   grey and the rails light grey, so only boxes survive;
+3. label each pixel by the nearest colour class taught from sample parts (``teach.py``): a region
+   of CIELAB, compared at the class's lightness so that shading does not count (anything else is
+   "unknown"), so that touching boxes of different colours come apart;
 4. connected components per label; a component about twice a box's area is split with k-means;
 5. per component: the minimum-area rectangle's centre and the outline's mean direction (on the
    quarter-turn circle) give centre and yaw, back-projected through the camera onto the plane
@@ -27,6 +28,7 @@ import numpy as np
 
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, check_range
 from colorsort.errors import ConfigError
+from colorsort.expert.colour_classes import ColourClasses, TaughtColours
 
 UNKNOWN = "unknown"
 
@@ -88,17 +90,17 @@ class PerceptionConfig:
     """Thresholds of the colour sensor.
 
     Attributes:
-        colors: labels the sensor reports; any other colour is "unknown". Their reference hues
-            come from the colour specification (``config.COLORS``), as a cell is calibrated
-            against colour swatches.
-        hue_tolerance: max distance [deg] of a pixel's hue from a reference hue.
+        colors: labels the sensor reports; any other colour is "unknown". Each is a class taught from a
+            sample part (``teach.py``; the cell's as built: ``colour_classes.SHIPPED``).
+        tolerance: [delta E, CIE76] the largest distance of a pixel's colour, at a class's lightness, from the
+            class's taught colour (``benchmarks/bench_colours.py`` gives the distances that set it).
         min_saturation: HSV saturation in [0, 1] below which a pixel is belt, rail or glare.
         min_value: HSV value in [0, 1] below which a pixel is too dark to judge.
         min_area: smallest blob kept, as a fraction of a box top face's area in the image.
     """
 
     colors: tuple[str, ...] = BIN_COLORS
-    hue_tolerance: float = 20.0
+    tolerance: float = 28.0
     min_saturation: float = 0.40
     min_value: float = 0.10
     min_area: float = 0.15
@@ -107,7 +109,7 @@ class PerceptionConfig:
         unknown = [c for c in self.colors if c not in COLORS]
         if unknown:
             raise ConfigError(f"Unknown colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
-        check_range("hue_tolerance", self.hue_tolerance, 1.0, 90.0)
+        check_range("tolerance", self.tolerance, 1.0, 100.0)
         for name in ("min_saturation", "min_value", "min_area"):
             check_range(name, getattr(self, name), 0.0, 1.0)
 
@@ -121,8 +123,8 @@ class Detection:
         center: centre of the box's top face in the world [m], (3,).
         yaw: rotation of the box about world z [rad], in [-pi/4, pi/4) (a cube looks the same
             every quarter turn).
-        confidence: in [0, 1]: hue agreement with the reference times the fraction of a full
-            top face that is visible.
+        confidence: in [0, 1]: colour agreement with the class (1 - mean distance / tolerance) times the
+            fraction of a full top face that is visible.
         complete: False when the box touches the edge of the view (partly in view); its
             centre and yaw are then those of the visible part only.
         area: blob area [px].
@@ -160,30 +162,25 @@ class ColorSensor:
         layout: the cell's geometry: belt position, box size (sets the region of interest and
             the height of the boxes' top faces).
         config: thresholds.
+        taught: the colour classes' teach (the cell's as built by default: ``TaughtColours.load()``).
     """
 
-    def __init__(self, camera: CameraModel, layout: CellLayout, config: PerceptionConfig = PerceptionConfig()):
+    def __init__(self, camera: CameraModel, layout: CellLayout, config: PerceptionConfig = PerceptionConfig(),
+                 taught: TaughtColours | None = None):
         self.camera = camera
         self.layout = layout
         self.config = config
         self.top_z = layout.belt_top_z + layout.box_size
-        self._ref_hues = np.array([hue_of(COLORS[c]) for c in config.colors])
+        self.classes = ColourClasses(taught or TaughtColours.load(), config.colors, config.tolerance)
         size_px = camera.focal * layout.box_size / (camera.position[2] - self.top_z)
         self.box_area_px = size_px**2
         self._roi = self._belt_roi()
-        self._roi_bool = self._roi > 0
+        self.roi = self._roi > 0  # (H, W) where a box's top face on the belt can be
         self._roi_inner = cv2.erode(self._roi, np.ones((3, 3), np.uint8)).astype(bool)  # not on its edge
         self._kernel = np.ones((3, 3), np.uint8)
-        self._min_s, self._min_v = config.min_saturation * 255, config.min_value * 255
-        # Lookup tables over OpenCV's 256-step hue circle: label index (len(colors) = unknown)
-        # and distance to that label's reference hue [deg].
-        hues = np.arange(256) * (360.0 / 256.0)
-        dist = np.abs((hues[:, None] - self._ref_hues + 180.0) % 360.0 - 180.0)  # (256, k)
-        nearest = dist.argmin(axis=1)
-        matched = dist.min(axis=1) <= config.hue_tolerance
+        self._min_s, self._min_v = config.min_saturation, config.min_value
+        self._rails, self._belt = self.surface_masks()
         self._labels = list(config.colors) + [UNKNOWN]
-        self._label_lut = np.where(matched, nearest, len(config.colors)).astype(np.uint8)
-        self._hue_err_lut = np.where(matched, dist.min(axis=1), config.hue_tolerance)
 
     def _belt_roi(self) -> np.ndarray:
         """Mask of the pixels that can see a box's top face on the belt, (H, W) uint8.
@@ -201,6 +198,32 @@ class ColorSensor:
         cv2.fillConvexPoly(roi, np.round(px).astype(np.int32), 1)
         return roi
 
+    def surface_masks(self) -> tuple[np.ndarray, np.ndarray]:
+        """Boolean masks (H, W) of the pixels that see the rails' top faces and the belt, inside their edges: the
+        references the light is measured on."""
+        L, cam = self.layout, self.camera
+        half = L.belt_width / 2
+        xs = cam.pixel_to_plane(np.array([[0.0, cam.height / 2], [cam.width, cam.height / 2]]), L.belt_top_z)[:, 0]
+        x0, x1 = xs.min() - 1, xs.max() + 1
+
+        def strip(y0: float, y1: float, z: float) -> np.ndarray:
+            corners = np.array([[x, y, z] for x in (x0, x1) for y in (y0, y1)])
+            mask = np.zeros((cam.height, cam.width), np.uint8)
+            cv2.fillConvexPoly(mask, np.round(cam.world_to_pixel(corners[[0, 1, 3, 2]])).astype(np.int32), 1)
+            return cv2.erode(mask, self._kernel).astype(bool)
+
+        rail_y = half + 0.012  # the arena's rails: 2 cm wide, their centres 12 mm outside the belt's edges
+        top = L.belt_top_z + 0.02
+        rails = strip(L.belt_y - rail_y - 0.006, L.belt_y - rail_y + 0.006, top) | strip(
+            L.belt_y + rail_y - 0.006, L.belt_y + rail_y + 0.006, top)
+        belt = strip(L.belt_y - half + 0.02, L.belt_y + half - 0.02, L.belt_top_z)
+        return rails, belt
+
+    def light_corrected(self, image: np.ndarray) -> np.ndarray:
+        """``image`` (H, W, 3) uint8 as it would look under the lights the classes were taught under, as float."""
+        rails, belt = (np.median(image[mask], axis=0) for mask in (self._rails, self._belt))
+        return image * self.classes.light_gain(rails, belt)
+
     def detect(self, image: np.ndarray) -> list[Detection]:
         """Every box in view, largest first.
 
@@ -210,9 +233,11 @@ class ColorSensor:
         cam, cfg = self.camera, self.config
         if image.shape != (cam.height, cam.width, 3) or image.dtype != np.uint8:
             raise ConfigError(f"Expected a ({cam.height}, {cam.width}, 3) uint8 image, got {image.shape} {image.dtype}")
-        hsv = cv2.cvtColor(cv2.GaussianBlur(image, (3, 3), 0), cv2.COLOR_RGB2HSV_FULL)
-        valid = (hsv[..., 1] >= self._min_s) & (hsv[..., 2] >= self._min_v) & self._roi_bool
-        label_img = np.where(valid, self._label_lut[hsv[..., 0]], 255).astype(np.uint8)  # (H, W)
+        rgb = self.light_corrected(cv2.GaussianBlur(image, (3, 3), 0))
+        hsv = cv2.cvtColor(np.clip(rgb, 0, 255).astype(np.float32) / 255, cv2.COLOR_RGB2HSV)  # S, V in [0, 1]
+        valid = (hsv[..., 1] >= self._min_s) & (hsv[..., 2] >= self._min_v) & self.roi
+        labels, distance = self.classes.label(rgb)
+        label_img = np.where(valid, labels, 255).astype(np.uint8)  # (H, W)
         detections = []
         for k, label in enumerate(self._labels):
             mask = cv2.morphologyEx((label_img == k).view(np.uint8), cv2.MORPH_OPEN, self._kernel)
@@ -224,8 +249,8 @@ class ColorSensor:
                 window = (slice(y, y + h), slice(x, x + w))
                 blob = comp[window] == c
                 for part in self._split(blob):
-                    hue_err = float(self._hue_err_lut[hsv[..., 0][window][part]].mean())
-                    detections.append(self._measure(part, (x, y), label, hue_err))
+                    err = float(np.minimum(distance[window][part], cfg.tolerance).mean())
+                    detections.append(self._measure(part, (x, y), label, err))
         detections.sort(key=lambda d: -d.area)
         return detections
 
@@ -264,7 +289,7 @@ class ColorSensor:
             parts.append(part)
         return parts
 
-    def _measure(self, part: np.ndarray, offset: tuple[int, int], label: str, hue_err: float) -> Detection:
+    def _measure(self, part: np.ndarray, offset: tuple[int, int], label: str, err: float) -> Detection:
         """Centre and yaw of one box's mask ``part``, a window of the image whose corner is at ``offset`` [px]."""
         cam, cfg = self.camera, self.config
         contours, _ = cv2.findContours(part.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
@@ -289,6 +314,6 @@ class ColorSensor:
             or not self._roi_inner[rows, cols].all()
         )
         area = int(part.sum())
-        agreement = max(0.0, 1.0 - hue_err / cfg.hue_tolerance) if label != UNKNOWN else 0.0
+        agreement = max(0.0, 1.0 - err / cfg.tolerance) if label != UNKNOWN else 0.0
         confidence = agreement * min(1.0, area / self.box_area_px)
         return Detection(label, center, yaw, confidence, not touches, area)

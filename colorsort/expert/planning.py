@@ -204,6 +204,37 @@ class JointTrajectory:
         return np.array(pos), np.array(vel), np.array(acc)
 
 
+class DensePath:
+    """A joint path sampled every control period, with the interface of ``JointTrajectory``.
+
+    Args:
+        q: joint positions [rad], (K + 1, n), one per period ``dt`` [s] from time 0.
+    """
+
+    def __init__(self, q: np.ndarray, dt: float):
+        self.q, self.dt = q, dt
+        self.qd = np.gradient(q, dt, axis=0)  # (K + 1, n) [rad/s]
+        self.goal = q[-1]
+
+    @property
+    def duration(self) -> float:
+        return self.dt * (len(self.q) - 1)
+
+    def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position [rad] and velocity [rad/s] at ``t`` [s] (linear between samples, clamped to the ends)."""
+        u = min(max(t / self.dt, 0.0), len(self.q) - 1.0)
+        k = min(int(u), len(self.q) - 2)
+        w = u - k
+        q = (1 - w) * self.q[k] + w * self.q[k + 1]
+        qd = (1 - w) * self.qd[k] + w * self.qd[k + 1]
+        return q, qd, np.zeros_like(q)
+
+    def slope(self, t: float) -> np.ndarray:
+        """[rad/s] the velocity of the straight segment between samples that ``sample`` interpolates at ``t`` [s]."""
+        k = min(max(int(t / self.dt), 0), len(self.q) - 2)
+        return (self.q[k + 1] - self.q[k]) / self.dt
+
+
 def plan_motion(start: np.ndarray, goal: np.ndarray, limits: JointLimits,
                 start_velocity: np.ndarray | None = None, start_acceleration: np.ndarray | None = None,
                 goal_velocity: np.ndarray | None = None, minimum_duration: float | None = None) -> JointTrajectory:

@@ -11,10 +11,12 @@ Phases (the original's numbering):
 1. ``MOVE_TO_WAIT``: move to the wait pose, beside and above the pick point, out of the camera's view;
 2. ``WAIT_FOR_BOX``: hold until the ray sees a box, then look: a box of a bin colour is picked,
    any other (or none seen) is let through (``LET_THROUGH``: belt-pass on until the ray clears);
-3. ``APPROACH``: over the box where the camera saw it, cup turned to its yaw;
-   ``DESCEND``: suction on, down onto the box;
-4. ``GRIP``: hold until the vacuum switch reports a seal;
-5. ``BACK_UP``: straight up;
+3. ``APPROACH``: fast to over the box where the camera saw it, clear of the tallest box the cell
+   accepts, cup turned to its yaw, ending on the way down;
+4. ``DESCEND``: suction on, the touch-off (``touch.py``): guarded, straight down until the vacuum switch
+   reports a seal; at the floor with none, ``BACK_OFF`` (straight up, the pick given up and its reason kept
+   in ``misses``) and look again;
+5. ``BACK_UP``: straight up, from wherever the seal formed;
 6. ``MOVE_OVER_BIN``: to the next drop slot over the bin of the colour seen;
 7. ``RELEASE``: suction off until the seal is gone and the box has fallen clear;
 8. emptying full bins is the cell's own job here: ``ColorSort`` empties a bin when it is full.
@@ -32,7 +34,8 @@ import numpy as np
 
 from colorsort.expert.base import Expert, Handler, ray_blocked, sealed
 from colorsort.expert.perception import Detection
-from colorsort.expert.planning import Waypoint
+from colorsort.expert.planning import DensePath, Waypoint, plan_motion
+from colorsort.expert.touch import straight_path
 
 
 class SorterPhase(Enum):
@@ -43,7 +46,7 @@ class SorterPhase(Enum):
     LET_THROUGH = "let box through"
     APPROACH = "approach box"
     DESCEND = "descend"
-    GRIP = "grip"
+    BACK_OFF = "back off"
     BACK_UP = "back up"
     MOVE_OVER_BIN = "move over bin"
     RELEASE = "release"
@@ -52,11 +55,13 @@ class SorterPhase(Enum):
 
 @dataclass(frozen=True)
 class PickPlan:
-    """Joint angles [rad] of one pick: over the box, on it, and lifted."""
+    """One pick: the cup over the box (joint angles [rad]), the touch-off's way down, and where it lifts to."""
 
     above: np.ndarray
-    contact: np.ndarray
-    lift: np.ndarray
+    descent: DensePath
+    x: float  # [m] the box's centre as seen
+    y: float
+    yaw: float  # [rad] the cup's
 
 
 class SortingExpert(Expert):
@@ -75,7 +80,8 @@ class SortingExpert(Expert):
         return {
             SorterPhase.MOVE_TO_WAIT: self._move_to_wait, SorterPhase.WAIT_FOR_BOX: self._wait_for_box,
             SorterPhase.LET_THROUGH: self._let_through, SorterPhase.APPROACH: self._approach,
-            SorterPhase.DESCEND: self._descend, SorterPhase.GRIP: self._grip, SorterPhase.BACK_UP: self._back_up,
+            SorterPhase.DESCEND: self._descend, SorterPhase.BACK_OFF: self._back_off,
+            SorterPhase.BACK_UP: self._back_up,
             SorterPhase.MOVE_OVER_BIN: self._move_over_bin, SorterPhase.RELEASE: self._release,
             SorterPhase.CLEAR: self._clear,
         }
@@ -112,18 +118,19 @@ class SortingExpert(Expert):
             self._enter(SorterPhase.LET_THROUGH)
             return
         self.pick = self._plan_pick(self.target)
-        self._start_motion(goal, self.pick.above, self.config.approach_tolerance)
+        descending = self.pick.descent.qd[0]  # the approach ends on its way down
+        self._follow(plan_motion(goal, self.pick.above, self.limits, goal_velocity=descending),
+                     self.config.approach_tolerance)
         self._enter(SorterPhase.APPROACH)
 
     def _plan_pick(self, t: Detection) -> PickPlan:
-        L, cfg = self.layout, self.config
+        cfg = self.config
         yaw = self.cup_yaw + self.turn(t)
-        x, y = t.center[0], t.center[1]
-        top = L.belt_top_z + L.box_size
-        above = self.ik.solve(Waypoint("above box", (x, y, top + cfg.approach_gap), yaw), self.q_wait)
-        contact = self.ik.solve(Waypoint("on box", (x, y, top - cfg.press), yaw), above)
-        lift = self.ik.solve(Waypoint("lift", (x, y, cfg.carry_z), yaw), contact)
-        return PickPlan(above, contact, lift)
+        x, y = float(t.center[0]), float(t.center[1])
+        above = self.ik.solve(Waypoint("above box", (x, y, self.descent.start), yaw), self.q_wait)
+        down = straight_path(self.ik, (x, y, self.descent.start), (0.0, 0.0, -cfg.touch_speed), yaw,
+                             self.descent.duration(cfg.touch_speed), self.dt, above)
+        return PickPlan(above, down, x, y, yaw)
 
     # 2'. a box with no bin (or none seen): run the belt until the ray clears
     def _let_through(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
@@ -132,26 +139,32 @@ class SortingExpert(Expert):
             self.cycles[-1].done_at = self.time
             self._enter(SorterPhase.WAIT_FOR_BOX)
 
-    # 3. over the box, then suction on and down onto it
+    # 3. over the box, on the way down as the approach ends; 4. the touch-off
     def _approach(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
-        if self._arrived(q):
-            self.suction = True  # on for the last few centimetres
-            assert self.pick is not None, "APPROACH follows a planned pick"
-            self._start_motion(goal, self.pick.contact, self.config.approach_tolerance)
+        assert self.motion is not None and self.pick is not None, "APPROACH follows a planned pick"
+        if self.motion.done(self.time + self.dt):  # it ends before the next command: the descent follows on at once
+            self.suction = True
+            self._follow(self.pick.descent, np.inf, started=self.motion.end)
             self._enter(SorterPhase.DESCEND)
 
     def _descend(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
-        if self._arrived(q):
-            self._enter(SorterPhase.GRIP)
-
-    # 4. grip: wait for the vacuum switch
-    def _grip(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
-        if sealed(obs):
-            assert self.pick is not None, "GRIP follows a planned pick"
-            self._start_motion(goal, self.pick.lift, self.config.lift_tolerance)
+        assert self.motion is not None and self.pick is not None, "DESCEND follows a planned pick"
+        p = self.pick
+        if sealed(obs):  # the part is present: stop where it is (not at the planner's jerk) and lift it from there
+            here = self._current_state()[0]
+            lift = self.ik.solve(Waypoint("lift", (p.x, p.y, self.config.carry_z), p.yaw), here)
+            self._start_motion(here, lift, self.config.lift_tolerance)
             self._enter(SorterPhase.BACK_UP)
-        elif self.time - self.phase_started > self.config.grip_timeout:
-            self.suction = False  # no seal: back off and look again
+        elif self.motion.done(self.time):  # down to the floor with no seal: nothing there to pick
+            self.suction = False
+            self.misses.append((self.time, f"no seal down to the floor ({self.descent.floor:.3f} m) at "
+                                           f"({p.x:.3f}, {p.y:.3f}) m"))
+            self._start_from_here(p.above, self.config.lift_tolerance)
+            self._enter(SorterPhase.BACK_OFF)
+
+    def _back_off(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
+        """Up clear of any box, then to the wait pose to look again (the pick's cycle given up)."""
+        if self._arrived(q):
             self.cycles.pop()
             self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
             self._enter(SorterPhase.MOVE_TO_WAIT)

@@ -4,17 +4,19 @@ When the ray fires it takes one photo, whatever it is doing; the box's pose then
 photo and the belt's encoder alone: ``x = x_photo - (travel - travel_photo)``, y and yaw as seen
 (the encoder's speed, travel per control period, predicts ahead). For each box it can meet, it
 plans an interception: where and when the cup is over the box moving with it (ruckig plans to a
-target velocity as well as a position), then follows the box down while it seals and lifts (a dense
-IK path at the belt's velocity), and carries it off from partway up the lift (``track_carry_at``) to
-sort it as the stopping-belt expert does. Each leg starts where and when the one before ends. A box it can no
-longer meet within the arm's reach before the belt's end it lets go: it rides off the end
+target velocity as well as a position) clear of the tallest box the cell accepts, then comes down
+onto it guarded, moving with it, until the vacuum switch reports a seal (the touch-off, ``touch.py``),
+and lifts it (dense IK paths at the belt's velocity), and carries it off from partway up the lift
+(``track_carry_at``) to sort it as the stopping-belt expert does. Each leg starts where and when the one
+before ends. A box it can no longer meet within the arm's reach before the belt's end it lets go: it rides off the end
 (``rejected`` if it has no bin, ``dropped`` otherwise); ``let_go`` counts them.
 
 Phases: ``MOVE_TO_WAIT`` (just upstream of the reach window), ``WAIT_FOR_BOX``,
-``INTERCEPT``, ``TRACK`` (suction on, down, seal, up, moving with the belt), ``MOVE_OVER_BIN``,
-``RELEASE``; after a release it goes straight to the next box it can meet, and when none can be met yet
-it waits over the bin (``wait_over_bin``: the way to the next box is then one motion from rest to the box)
-or at the wait pose.
+``INTERCEPT``, ``TRACK`` (suction on, down until the seal, moving with the belt; none before the floor
+or the end of the reach: the box is let go, the reason kept in ``misses``), ``LIFT`` (up, moving with the
+belt), ``MOVE_OVER_BIN``, ``RELEASE``; after a release it goes straight to the next box it can meet, and
+when none can be met yet it waits over the bin (``wait_over_bin``: the way to the next box is then one
+motion from rest to the box) or at the wait pose.
 """
 
 from __future__ import annotations
@@ -26,11 +28,12 @@ from functools import cached_property
 import numpy as np
 
 from colorsort.cell.privileged import NOTHING_HELD, TakeOver
-from colorsort.config import BIN_COLORS, CellLayout
+from colorsort.config import BIN_COLORS
 from colorsort.expert.base import Cycle, Expert, Handler, ray_blocked, sealed
 from colorsort.expert.config import ExpertConfig
 from colorsort.expert.perception import wrap_quarter_turn
-from colorsort.expert.planning import JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
+from colorsort.expert.planning import DensePath, JointTrajectory, UnreachableWaypoint, Waypoint, plan_motion
+from colorsort.expert.touch import straight_path
 
 
 class TrackingPhase(Enum):
@@ -39,7 +42,8 @@ class TrackingPhase(Enum):
     MOVE_TO_WAIT = "move to wait pose"
     WAIT_FOR_BOX = "wait for box"
     INTERCEPT = "intercept box"  # over the moving box, moving with it
-    TRACK = "track box"  # down onto the moving box, seal and lift, moving with it
+    TRACK = "track box"  # down onto the moving box until it seals, moving with it
+    LIFT = "lift box"  # up off the belt, moving with it
     MOVE_OVER_BIN = "move over bin"
     RELEASE = "release"
     CLEAR = "lift clear"  # a take-over's first motion (``Expert.take_over``)
@@ -56,63 +60,30 @@ class Sighting:
     travel: float  # [m] the belt encoder at the photo
 
 
-class DensePath:
-    """A joint path sampled every control period, with the interface of ``JointTrajectory``.
-
-    Args:
-        q: joint positions [rad], (K + 1, n), one per period ``dt`` [s] from time 0.
-    """
-
-    def __init__(self, q: np.ndarray, dt: float):
-        self.q, self.dt = q, dt
-        self.qd = np.gradient(q, dt, axis=0)  # (K + 1, n) [rad/s]
-        self.goal = q[-1]
-
-    @property
-    def duration(self) -> float:
-        return self.dt * (len(self.q) - 1)
-
-    def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Position [rad] and velocity [rad/s] at ``t`` [s] (linear between samples, clamped to the ends)."""
-        u = min(max(t / self.dt, 0.0), len(self.q) - 1.0)
-        k = min(int(u), len(self.q) - 2)
-        w = u - k
-        q = (1 - w) * self.q[k] + w * self.q[k + 1]
-        qd = (1 - w) * self.qd[k] + w * self.qd[k + 1]
-        return q, qd, np.zeros_like(q)
-
-    def slope(self, t: float) -> np.ndarray:
-        """[rad/s] the velocity of the straight segment between samples that ``sample`` interpolates at ``t`` [s]."""
-        k = min(max(int(t / self.dt), 0), len(self.q) - 2)
-        return (self.q[k + 1] - self.q[k]) / self.dt
-
-
 def smoothstep(u: float) -> float:
     """0 -> 1 with zero slope at both ends, u in [0, 1]."""
     u = min(max(u, 0.0), 1.0)
     return u * u * (3.0 - 2.0 * u)
 
 
-def track_heights(config: ExpertConfig, layout: CellLayout, dt: float) -> np.ndarray:
-    """Cup heights [m], one per control period ``dt`` [s] from the meeting, while following a box: from
-    ``approach_gap`` over its top down onto it (``press`` into it), held while the seal forms, then up
-    until the box's bottom is ``track_lift_gap`` over the belt."""
-    top = layout.belt_top_z + layout.box_size
-    z_over, z_on, z_up = top + config.approach_gap, top - config.press, top + config.track_lift_gap
-    t1 = config.track_descend_time
+def lift_heights(config: ExpertConfig, dt: float) -> np.ndarray:
+    """Cup heights [m] over where it touched, one per control period ``dt`` [s] from the seal: on down ``press``
+    at ``touch_speed``, held ``track_hold_time``, then up until the box's bottom is ``track_lift_gap`` over the
+    belt (the touch was on its top: the cup rises that gap over it)."""
+    t1 = config.press / config.touch_speed
     t2 = t1 + config.track_hold_time
     t3 = t2 + config.track_lift_time
-    tau = dt * np.arange(int(np.ceil(t3 / dt)) + 1)
-    down = z_over + (z_on - z_over) * np.array([smoothstep(u) for u in tau / t1])
-    up = z_on + (z_up - z_on) * np.array([smoothstep(u) for u in (tau - t2) / (t3 - t2)])
-    return np.where(tau <= t1, down, up)
+    tau = dt * np.arange(int(np.ceil(t3 / dt - 1e-9)) + 1)
+    down = -config.touch_speed * np.minimum(tau, t1)
+    rise = np.array([smoothstep(u) for u in (tau - t2) / (t3 - t2)])
+    up = -config.press + (config.track_lift_gap + config.press) * rise
+    return np.where(tau <= t2, down, up)
 
 
-def carry_height(config: ExpertConfig, layout: CellLayout) -> float:
-    """[m] the cup's height where the carry to the bin takes over: ``track_carry_at`` of the way up the lift, on
-    ``track_heights``' curve."""
-    top = layout.belt_top_z + layout.box_size
-    return top - config.press + (config.track_lift_gap + config.press) * smoothstep(config.track_carry_at)
+def carry_height(config: ExpertConfig) -> float:
+    """[m] the cup over where it touched when the carry to the bin takes over: ``track_carry_at`` of the way up
+    the lift, on ``lift_heights``' curve."""
+    return -config.press + (config.track_lift_gap + config.press) * smoothstep(config.track_carry_at)
 
 
 class TrackingExpert(Expert):
@@ -132,6 +103,7 @@ class TrackingExpert(Expert):
     def handlers(self) -> dict[Enum, Handler]:
         return {TrackingPhase.MOVE_TO_WAIT: self._move_to_wait, TrackingPhase.WAIT_FOR_BOX: self._wait_for_box,
                 TrackingPhase.INTERCEPT: self._intercept, TrackingPhase.TRACK: self._track,
+                TrackingPhase.LIFT: self._lift,
                 TrackingPhase.MOVE_OVER_BIN: self._move_over_bin, TrackingPhase.RELEASE: self._release,
                 TrackingPhase.CLEAR: self._clear}
 
@@ -160,7 +132,7 @@ class TrackingExpert(Expert):
         height the cup meets a box: a box is met as it enters the window, so the interception starts from
         rest behind it and runs the way the belt does instead of turning back to match its speed."""
         L = self.layout
-        return (self.window[1] + 0.01, L.belt_y, L.belt_top_z + L.box_size + self.config.approach_gap)
+        return (self.window[1] + 0.01, L.belt_y, self.descent.start)
 
     def slot_cost(self, point: tuple[float, float], q: np.ndarray) -> float:
         """[s] the least time the arm could take between the wait pose, where boxes are met, and the release
@@ -170,8 +142,9 @@ class TrackingExpert(Expert):
 
     @cached_property
     def window(self) -> tuple[float, float]:
-        """The stretch of the belt centre line [m] where the cup reaches over, onto and the lift height of a
-        box, 2 cm inside its ends: grown both ways from the point nearest the home pose's cup, each IK
+        """The stretch of the belt centre line [m] where the cup reaches the touch-off's start and floor and the
+        height it lifts the tallest box to, 2 cm inside its ends: grown both ways from the point nearest the home
+        pose's cup, each IK
         warm-started from its neighbour's."""
         L = self.layout
         near = float(np.clip(self.ik.cup_pose(self.home)[0][0], L.belt_end_x + L.box_size, L.belt_start_x))
@@ -194,12 +167,11 @@ class TrackingExpert(Expert):
         return max(lo + 0.02, L.belt_end_x + L.box_size), hi - 0.02
 
     def _reaches(self, x: float, q: np.ndarray) -> np.ndarray | None:
-        """Joint angles [rad] over a box at ``x`` [m] on the belt centre line, if the cup also reaches onto it
-        and the height it lifts it to there; else None."""
-        L, cfg = self.layout, self.config
-        top = L.belt_top_z + L.box_size
+        """Joint angles [rad] at the touch-off's start over ``x`` [m] on the belt centre line, if the cup also
+        reaches its floor and the height it lifts the tallest box to there; else None."""
+        L, cfg, d = self.layout, self.config, self.descent
         try:
-            for z in (top + cfg.track_lift_gap, top - cfg.press, top + cfg.approach_gap):
+            for z in (L.belt_top_z + L.tallest_box + cfg.track_lift_gap, d.floor, d.start):
                 q = self.ik.solve(Waypoint("reach", (x, L.belt_y, z), self.cup_yaw), q)
         except UnreachableWaypoint:
             return None
@@ -207,13 +179,14 @@ class TrackingExpert(Expert):
 
     @cached_property
     def carry_from(self) -> float:
-        """[s] into a track path: where the carry to the bin takes over, ``track_carry_at`` of the way up."""
+        """[s] after the seal: where the carry to the bin takes over, ``track_carry_at`` of the way up the lift."""
         c = self.config
-        return c.track_descend_time + c.track_hold_time + c.track_carry_at * c.track_lift_time
+        return c.press / c.touch_speed + c.track_hold_time + c.track_carry_at * c.track_lift_time
 
     def reset(self, obs: dict | None = None) -> None:
         super().reset(obs)
         self._track_plan: DensePath | None = None
+        self._leave_at = 0.0  # [s] expert time: the carry takes over from the lift
         self.queue: list[Sighting] = []
         self.let_go = 0
         self.travel = 0.0  # [m] the belt encoder
@@ -246,12 +219,6 @@ class TrackingExpert(Expert):
     def seen_color(self) -> str | None:
         return self.current.cycle.seen_color if self.current is not None else None
 
-    def _current_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The commanded reference now: position [rad], velocity [rad/s], acceleration [rad/s^2]."""
-        if self.motion is None:
-            return self._q_cmd, np.zeros_like(self._q_cmd), np.zeros_like(self._q_cmd)
-        return self.motion.sample(self.time)
-
     def _box_x(self, s: Sighting, t: float) -> float:
         """[m] the box's predicted x at expert time ``t``, from the photo and the encoder."""
         return s.x - (self.travel - s.travel) - self.belt_speed * (t - self.time)
@@ -282,16 +249,16 @@ class TrackingExpert(Expert):
         return False
 
     def _plan_intercept(self, s: Sighting) -> tuple[JointTrajectory, DensePath] | None:
-        """(approach, track) for box ``s``, or None when it can no longer be met within reach.
+        """(approach, descent) for box ``s``, or None when it can no longer be met within reach.
 
-        The approach (ruckig, from the reference now) ends over the box, ``approach_gap`` above its
-        top, moving with it; if the box is not yet within reach by then, it ends as the box enters
-        the reach window. The track follows it down, holds while the seal forms, and lifts it, at the
-        belt's velocity, and must end before the window does.
+        The approach (ruckig, from the reference now) ends over the box at the touch-off's start, moving with it
+        and on its way down; if the box is not yet within reach by then, it ends as the box enters the reach
+        window. The descent follows it down to the floor or to where the lift still ends within the window,
+        whichever comes first, and must reach the top of the tallest box the cell accepts.
         """
         cfg, v, now = self.config, self.belt_speed, self.time
-        track_time = cfg.track_descend_time + cfg.track_hold_time + cfg.track_lift_time
-        x_lo, x_hi = self.window[0] + v * track_time, self.window[1]
+        x_end = self.window[0] + v * self.carry_from  # the box's x [m] at the seal, at the latest
+        x_lo, x_hi = x_end + v * cfg.touch_clearance / cfg.touch_speed, self.window[1]
         start = self._current_state()
         t_meet, x = now, None
         for _ in range(12):  # fixed point: where the box is when the motion that meets it there ends
@@ -300,7 +267,7 @@ class TrackingExpert(Expert):
                 return None
             entering = x_then > x_hi  # not in reach yet: meet it as it enters
             x = x_hi if entering else x_then
-            if x < x_lo:  # the window is too short to follow it down and up
+            if x < x_lo:  # the window is too short to come down onto the tallest box
                 return None
             wait = (self._box_x(s, now) - x_hi) / v if entering else None
             try:
@@ -312,59 +279,86 @@ class TrackingExpert(Expert):
                                    start_acceleration=start[2], goal_velocity=qd_over, minimum_duration=wait)
             arrive = now + approach.duration
             if abs(self._box_x(s, arrive) - x) < 0.002:  # [m]
+                duration = min(self.descent.duration(cfg.touch_speed), (x - x_end) / v)
                 try:
-                    return approach, self._track_path(s, x, v, q_over)
+                    return approach, straight_path(self.ik, (x, s.y, self.descent.start), self._touch_velocity(v),
+                                                   s.yaw, duration, self.dt, q_over)
                 except UnreachableWaypoint:
                     return None
             t_meet = arrive
         return None
 
-    def _over_box(self, s: Sighting, x: float, v: float) -> tuple[np.ndarray, np.ndarray]:
-        """Joint angles [rad] with the cup 4 cm over the box at ``x`` [m], and joint velocities [rad/s]
-        that move it along with the belt at ``v`` [m/s] (from IK 1 cm downstream)."""
-        z = self.layout.belt_top_z + self.layout.box_size + self.config.approach_gap
-        q = self.ik.solve(Waypoint("over moving box", (x, s.y, z), s.yaw), self.q_wait)
-        q_next = self.ik.solve(Waypoint("over moving box", (x - 0.01, s.y, z), s.yaw), q)
-        return q, (q_next - q) * (v / 0.01)
+    def _touch_velocity(self, v: float) -> tuple[float, float, float]:
+        """[m/s] the cup's while it comes down onto a box riding the belt at ``v`` [m/s]."""
+        return (-v, 0.0, -self.config.touch_speed)
 
-    def _track_path(self, s: Sighting, x0: float, v: float, q0: np.ndarray) -> DensePath:
-        """Down onto the box, hold, and up off the belt (``track_heights``), moving with it from ``x0`` [m]
+    def _over_box(self, s: Sighting, x: float, v: float) -> tuple[np.ndarray, np.ndarray]:
+        """Joint angles [rad] with the cup at the touch-off's start over the box at ``x`` [m], and joint velocities
+        [rad/s] that move it on down with the belt at ``v`` [m/s] (from IK 1 cm along that way)."""
+        z = self.descent.start
+        velocity = np.array(self._touch_velocity(v))
+        speed = float(np.linalg.norm(velocity))
+        q = self.ik.solve(Waypoint("over moving box", (x, s.y, z), s.yaw), self.q_wait)
+        ahead = np.array([x, s.y, z]) + 0.01 * velocity / speed
+        q_next = self.ik.solve(Waypoint("over moving box", tuple(ahead), s.yaw), q)
+        return q, (q_next - q) * (speed / 0.01)
+
+    def _lift_path(self, s: Sighting, v: float) -> DensePath:
+        """From the reference now, where the cup touched, up off the belt (``lift_heights``), moving with the box
         at ``v`` [m/s]."""
+        q0 = self._current_state()[0]
+        p0 = self.ik.cup_pose(q0)[0]
         path, q = [q0], q0
-        for k, z in enumerate(track_heights(self.config, self.layout, self.dt)[1:], start=1):
-            q = self.ik.solve(Waypoint("tracking the box", (x0 - v * k * self.dt, s.y, z), s.yaw), q)
+        for k, dz in enumerate(lift_heights(self.config, self.dt)[1:], start=1):
+            q = self.ik.solve(Waypoint("lifting the box", (p0[0] - v * k * self.dt, p0[1], p0[2] + dz), s.yaw), q)
             path.append(q)
         return DensePath(np.array(path), self.dt)
 
-    # 3. meet the box, then follow it down, seal and lift
+    # 3. meet the box, then come down onto it until it seals, and lift it, moving with it
     def _intercept(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         assert self.motion is not None and self._track_plan is not None, "INTERCEPT follows a planned interception"
-        if self.motion.done(self.time + self.dt):  # it ends before the next command: the track follows on at once
+        if self.motion.done(self.time + self.dt):  # it ends before the next command: the descent follows on at once
             self.suction = True
             self._follow(self._track_plan, np.inf, started=self.motion.end)
             self._enter(TrackingPhase.TRACK)
 
     def _track(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         assert self.motion is not None and self.current is not None, "TRACK follows an interception"
+        if sealed(obs):
+            self._follow(self._lift_path(self.current, self.belt_speed), np.inf)
+            self._leave_at = self.time + self.carry_from
+            self._enter(TrackingPhase.LIFT)
+        elif self.motion.done(self.time):
+            self._miss(f"no seal down to {self.ik.cup_pose(self._current_state()[0])[0][2]:.3f} m "
+                       "before the floor or the end of the reach")
+
+    def _lift(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
+        assert self.motion is not None and self.current is not None, "LIFT follows a seal"
         path = self.motion.trajectory
-        assert isinstance(path, DensePath), "TRACK follows the box along a dense path"
-        leave_at = self.motion.started + self.carry_from  # [s] expert time
-        if self.time + self.dt < leave_at:  # the next command is still the track's
+        assert isinstance(path, DensePath), "LIFT follows the box along a dense path"
+        if self.time + self.dt < self._leave_at:  # the next command is still the lift's
             return
         if sealed(obs):  # 5, 6: on to the bin, from the moving state, the box still rising
             color = self.current.cycle.target_bin
             assert color is not None, "only a box with a bin is met"
-            q, _, _ = path.sample(self.carry_from)
-            trajectory = plan_motion(q, self._next_drop(color), self.limits, start_velocity=path.slope(self.carry_from))
-            self._follow(trajectory, self.config.drop_tolerance, started=leave_at)
+            at = self._leave_at - self.motion.started
+            trajectory = plan_motion(path.sample(at)[0], self._next_drop(color), self.limits,
+                                     start_velocity=path.slope(at))
+            self._follow(trajectory, self.config.drop_tolerance, started=self._leave_at)
             self._enter(TrackingPhase.MOVE_OVER_BIN)
-        else:  # no seal: the box rides on
-            self.suction = False
-            self.current.cycle.target_bin, self.current.cycle.done_at = None, self.time
-            self.current = None
-            self.let_go += 1
-            self._start_from_here(self.q_wait, self.config.wait_tolerance)
-            self._enter(TrackingPhase.MOVE_TO_WAIT)
+        else:
+            self._miss("the seal was lost in the lift")
+
+    def _miss(self, why: str) -> None:
+        """No box on the cup: suction off, the box rides on, back to the wait pose."""
+        assert self.current is not None, "a box was being picked"
+        self.misses.append((self.time, why))
+        self.suction = False
+        self.current.cycle.target_bin, self.current.cycle.done_at = None, self.time
+        self.current = None
+        self.let_go += 1
+        self._start_from_here(self.q_wait, self.config.wait_tolerance)
+        self._enter(TrackingPhase.MOVE_TO_WAIT)
 
     def _move_over_bin(self, obs: dict, q: np.ndarray, goal: np.ndarray) -> None:
         if self._arrived(q):
@@ -389,9 +383,3 @@ class TrackingExpert(Expert):
         else:
             self._start_motion(goal, self.q_wait, self.config.wait_tolerance)
             self._enter(TrackingPhase.MOVE_TO_WAIT)
-
-    def _start_from_here(self, goal: np.ndarray, tolerance: float) -> None:
-        ref, vel, acc = self._current_state()
-        trajectory = plan_motion(ref, goal, self.limits, start_velocity=vel,
-                                 start_acceleration=acc)
-        self._follow(trajectory, tolerance)

@@ -15,7 +15,7 @@ from colorsort.shifts.registry import register
 class BoxShape(Shift):
     name = "box-shape"
     group = "objects"
-    summary = "every box an upright cylinder with a flat top: a can at level 1, pucks at 2 and 3 (the ray sees 5 cm up)"
+    summary = "every box an upright cylinder with a flat top: a can at level 1, pucks at 2 and 3 (the ray sees 4 cm up)"
     unit = "cylinder {} cm across, {} cm tall"
     magnitudes = ((10.0, 10.0), (11.0, 7.0), (12.0, 6.0))
     trainable = False  # wholly unseen by every recipe
