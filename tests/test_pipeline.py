@@ -93,6 +93,7 @@ def test_the_pipeline_runs_end_to_end_in_a_tiny_configuration(tmp_path, in_proce
     readme = (ship / "README.md").read_text()
     assert "colorsort-baseline --recipe state-tracking" in readme and "commit" in readme
     assert "| tracking-fast | ACT, state | 2 |" in readme and "| 2 (chosen) |" in readme
+    assert "trains the same weights, bit for bit" in readme  # test_the_same_training_command_gives_... holds it
     assert json.loads((ship / "scores.json").read_text())["rows"] == results["rows"]
     assert json.loads((ship / "config.json").read_text())["input_features"]["observation.state"]["shape"] == [24]
     assert eval_main(["--policy", str(ship), "--variant", "tracking", "--episodes", "1", "--episode-length", "5"]) == 0
@@ -830,3 +831,27 @@ def test_a_reshipped_baseline_names_its_commit_clean_when_only_its_own_folder_ch
     assert commit().endswith("(with uncommitted changes)")
     (tmp_path / "code.py").write_text("x = 2\n")
     assert commit(Path("baselines/p")).endswith("(with uncommitted changes)")
+
+
+@pytest.mark.slow
+def test_the_same_training_command_gives_the_same_weights_bit_for_bit(tmp_path):
+    """The randomised camera recipe's training (its image shifts drawn in a data-loading process, its data order,
+    its initial weights), three updates on two demos, run twice as the pipeline runs it (``lerobot-train`` in its
+    own process, torch's threads fixed by ``stages.RUN_ENV``): the same weights, byte for byte; and another seed
+    gives other weights (the test can tell)."""
+    from colorsort.data.collect import collect
+    from colorsort.data.config import CollectConfig
+
+    data = tmp_path / "data"
+    collect(CollectConfig(out=str(data), episodes=2, image_size=(32, 32), cameras=("snapshot",),
+                          repo_id=stages.REPO_ID), progress=False, log=lambda _: None)
+    recipe = get_recipe("camera-snapshot-dr", {"training.batch_size": 4})
+    assert recipe.training.augment_args() and recipe.training.num_workers == 1
+
+    def weights(out: Path, seed: int = 1000) -> bytes:
+        run_dir, _ = stages.train(recipe, data, 3, seed, out)
+        return (run_dir / "checkpoints" / "last" / "pretrained_model" / "model.safetensors").read_bytes()
+
+    first = weights(tmp_path / "a")
+    assert weights(tmp_path / "b") == first
+    assert weights(tmp_path / "c", seed=1001) != first

@@ -477,8 +477,9 @@ def test_every_recipes_policy_arguments_are_ones_lerobot_accepts():
         config = draccus.parse(kinds[recipe.policy.type], args=args)
         assert config.n_action_steps == recipe.policy.n_action_steps, recipe.name
         if recipe.policy.type == "diffusion":
+            side = round(0.9 * recipe.demos.image_size)  # 90% of each side: 58 of 64 px, 29 of 32
             assert (config.use_group_norm, config.crop_shape, config.pretrained_backbone_weights) == (
-                True, (58, 58), None)
+                True, (side, side), None)
     with pytest.raises(SystemExit):
         draccus.parse(DiffusionConfig, args=["--crop_shapes=[58,58]"])
 

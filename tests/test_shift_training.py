@@ -70,12 +70,15 @@ def test_a_training_draw_follows_the_episodes_seed_and_stays_below_level_1_in_th
     ("camera-pose:2", "held-out level 2 of 'camera-pose'"), ("all:1", "held-out level 1"),
     ("box-shape:1", "'box-shape' has no training range"), ("novel-distractors:train", "has no training range")])
 def test_recording_into_a_held_out_range_exits_2_naming_it(capsys, tmp_path, given, named):
+    """Demos recorded, or a checkpoint chosen, under a held-out level: refused, one line each, nothing made."""
     assert exit_status(collect_main, ["--episodes", "1", "--out", str(tmp_path / "d"), "--shift", given]) == 2
     assert exit_status(baseline_main, ["--recipe", "camera-snapshot-dr", f"--demos.shift={given}",
                                        "--out", str(tmp_path / "b")]) == 2
+    assert exit_status(baseline_main, ["--recipe", "camera-snapshot-touch-dr", f"--evaluation.select_shift={given}",
+                                       "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and all(named in line for line in err)
-    assert not (tmp_path / "d").exists() and not (tmp_path / "b").exists()
+    assert len(err) == 3 and all(named in line for line in err)
+    assert not any((tmp_path / name).exists() for name in "dbc")
 
 
 def test_the_dr_recipe_records_every_training_range_and_its_dataset_says_so():
@@ -90,3 +93,35 @@ def test_the_dr_recipe_records_every_training_range_and_its_dataset_says_so():
     config = collect_args(["--shift", "camera-pose:train"])
     assert config.settings()["shift"] == "camera-pose:train"
     assert "shift" not in collect_args([]).settings()
+
+
+@pytest.mark.parametrize("name", ["camera-snapshot-touch-dr", "camera-diffusion-touch-dr"])
+def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_checkpoint_under_them(name, tmp_path,
+                                                                                                    monkeypatch):
+    """Every shift with a training range, box-size's included (the touch-off expert sorts any size), none wholly
+    held out; the images relit (and, for ACT, shifted) by LeRobot's image transforms; each checkpoint plays its
+    validation episodes unshifted and under the same ranges, both counted in the choice."""
+    from pathlib import Path
+
+    from colorsort.training import pipeline_stages as stages
+    from colorsort.training.selection import validate
+
+    recipe = get_recipe(name)
+    trained = {n for n, s in SHIFTS.items() if s.trainable}
+    assert {s.name for s in parse_shifts(recipe.demos.shift)} == trained and "box-size" in trained
+    assert not trained & {"box-shape", "novel-distractors"}
+    assert recipe.evaluation.select_shift == recipe.demos.shift and name.endswith("-dr")
+    assert "ColorJitter" in " ".join(recipe.training.augment_args())
+    calls = []
+
+    def fake_evaluate(recipe, model, variant, episodes, stem, envs, log_dir, first_seed=None, shift=""):
+        calls.append((variant, shift))
+        return {"episodes": episodes, "successes": episodes if shift else 0, "correct": 0, "misplaced": 0,
+                "dropped": 0, "success_rate": 1.0 if shift else 0.0}
+
+    monkeypatch.setattr(stages, "evaluate", fake_evaluate)
+    (point,) = validate(recipe, "run", [(1000, 5.0, Path("model"))], tmp_path, 1)
+    variants = recipe.demos.train_variants
+    assert calls == [(v, s) for v in variants for s in ("", recipe.demos.shift)]
+    assert point.episodes == 2 * len(variants) * recipe.evaluation.select_episodes
+    assert point.successes == len(variants) * recipe.evaluation.select_episodes  # the shifted ones count

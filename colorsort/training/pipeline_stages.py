@@ -48,7 +48,10 @@ from colorsort.versions import code_versions
 REPO_ID = "local/colorsort-baseline"
 BIN = Path(sys.executable).parent  # the console scripts of this interpreter's environment
 SEED_STRIDE = 1_000_000  # training variant k's demos use seeds k * SEED_STRIDE + i: no two overlap
-RUN_ENV = {"HF_HUB_OFFLINE": "1"}  # no hub downloads in any stage
+# No hub downloads in any stage; torch's threads fixed (2, or what the environment sets): float sums run in another
+# order on another count, so a training's weights depend on it, and with it fixed the same command gives the same
+# weights bit for bit (tests/test_pipeline.py).
+RUN_ENV = {"HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": os.environ.get("OMP_NUM_THREADS", "2")}
 
 
 def run(cmd: list[str], log: Path, append: bool = False) -> float:
@@ -366,16 +369,19 @@ def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
 
 
 def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, stem: Path, envs: int, log_dir: Path,
-             first_seed: int | None = None) -> dict:
+             first_seed: int | None = None, shift: str = "") -> dict:
     """``colorsort-eval`` of ``model`` on ``variant``'s first ``episodes`` evaluation seeds into
-    ``<stem>-<key>.json`` (reused if there); with ``first_seed``, on the seeds from it instead (validation seeds)."""
+    ``<stem>-<key>.json`` (reused if there); with ``first_seed``, on the seeds from it instead (validation seeds);
+    with ``shift`` (training ranges, ``--shift``), under it."""
     settings = [variant, "--episodes", str(episodes)]
     if first_seed is not None:
         settings += ["--seed", str(first_seed)]
     if recipe.evaluation.episode_length:
         settings += ["--episode-length", str(recipe.evaluation.episode_length)]
-    path = stem.with_name(cache.name(stem.name, {"colorsort-eval --variant": settings,
-                                                 "code": code_versions("cell")}) + ".json")
+    if shift:
+        settings += ["--shift", shift]
+    code = code_versions("cell", *(("shifts",) if shift else ()))
+    path = stem.with_name(cache.name(stem.name, {"colorsort-eval --variant": settings, "code": code}) + ".json")
     if path.is_file():
         print(f"reusing {path}")
         return json.loads(path.read_text())

@@ -36,6 +36,7 @@ from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
+from colorsort.shifts.registry import trainable, training_shifts
 from colorsort.training.dagger_config import DaggerConfig
 from colorsort.training.demos_config import DemosConfig, at_least_one
 from colorsort.training.method_names import method_name
@@ -152,6 +153,9 @@ class EvaluationConfig:
     # evaluation seeds), and the one that does best there is scored and shipped (``colorsort.training.selection``); 0:
     # the last checkpoint.
     select_episodes: int = 0
+    # held-out shifts' training ranges the checkpoints also play their validation episodes under (as
+    # ``DemosConfig.shift``; "": unshifted only), so that the one chosen holds under the ranges it trained on too.
+    select_shift: str = ""
     # evaluation steps before truncation (None: the variant's time limit).
     episode_length: int | None = None
 
@@ -161,6 +165,7 @@ class EvaluationConfig:
         if self.main_variant not in self.variants:
             raise ConfigError(f"main_variant={self.main_variant!r} must be one of variants {self.variants}")
         at_least_one(self, "episodes", "other_episodes", "curve_episodes")
+        training_shifts(self.select_shift, "evaluation.select_shift")  # ConfigError naming a held-out level
         if not 0 <= self.select_episodes <= len(VALIDATION_SEEDS):
             raise ConfigError(f"select_episodes={self.select_episodes}: give 0 (the last checkpoint) up to "
                               f"{len(VALIDATION_SEEDS)} (the validation seeds)")
@@ -259,6 +264,15 @@ DR_SHIFTS = ",".join(f"{name}:train" for name in ("camera-pose", "robot-start", 
                                                     "light-color", "image-noise", "box-mass", "belt-speed",
                                                     "joint-noise", "box-offset"))
 
+# Every shift with a training range, box-size's too now that the expert touches off whatever a box's height
+# (box-shape and novel-distractors have none: wholly unseen; action-delay and image-blur have none either).
+TOUCH_DR_SHIFTS = ",".join(f"{name}:train" for name in trainable())
+# The randomised recipe's policies, on demos of the touch-off expert: every training range, the images relit and
+# shifted by LeRobot's image transforms, twice the demos, the checkpoint chosen under the ranges too.
+TOUCH_DR_DEMOS = DemosConfig(train_mix=CAMERA_MIX, counts=(96,), cameras=("snapshot",), image_size=32,
+                             perturbations=(LatePass(100), LatePick(10), Brightness(0.45, 0.75)), shift=TOUCH_DR_SHIFTS)
+TOUCH_DR_EVALUATION = EvaluationConfig(select_episodes=10, select_shift=TOUCH_DR_SHIFTS)
+
 RECIPES: dict[str, Recipe] = {r.name: r for r in (
     Recipe("state",
            DemosConfig(train_mix=(("default", 1), ("jitter", 1), ("fast", 1), ("distractors", 2)), counts=(40,),
@@ -286,6 +300,15 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
            TrainingConfig(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1,
                          weights="float16"),
            EvaluationConfig(select_episodes=10)),
+    Recipe("camera-snapshot-touch-dr", TOUCH_DR_DEMOS,
+           replace(SMALL_ACT, optimizer_lr=3e-4, optimizer_lr_backbone=3e-4),
+           TrainingConfig(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_shift=0.1,
+                          image_relight=True, weights="float16"),
+           TOUCH_DR_EVALUATION),
+    Recipe("camera-diffusion-touch-dr", TOUCH_DR_DEMOS, SNAPSHOT_DIFFUSION,
+           TrainingConfig(steps=4000, save_every=1000, seeds=(1001, 1000, 1002), batch_size=32, image_relight=True,
+                          weights="float16"),
+           TOUCH_DR_EVALUATION),
     Recipe("camera-tracking",
            DemosConfig(train_mix=(("tracking", 1), ("tracking-jitter", 1)), counts=(48,), boxes_per_episode=5,
                         cameras=("sensor", "snapshot", "wrist"), image_size=64),

@@ -28,19 +28,24 @@ COUNTS = ("episodes", "successes", "correct", "misplaced", "dropped")
 def validate(recipe: Recipe, run: str, checkpoints: list[tuple[int, float, Path]], out: Path,
              envs: int) -> list[ValidationPoint]:
     """Every checkpoint of the training run ``run`` (``stages.checkpoints``: update, minutes, pretrained_model) on
-    ``recipe.evaluation.select_episodes`` validation episodes of each training variant; one point per checkpoint,
-    counts summed over the variants. Each evaluation is reused when its report is there."""
+    ``recipe.evaluation.select_episodes`` validation episodes of each training variant (and as many again under
+    ``recipe.evaluation.select_shift``'s training ranges, where it names some); one point per checkpoint, counts summed
+    over the variants. Each evaluation is reused when its report is there."""
     points = []
     for step, minutes, model in checkpoints:
         counts = dict.fromkeys(COUNTS, 0)
         by_variant = {}
+        shifts = ("", recipe.evaluation.select_shift) if recipe.evaluation.select_shift else ("",)
         for variant in recipe.demos.train_variants:
-            stem = out / "select" / f"{run}-{recipe.policy.execution}-{step}-{variant}"
-            report = stages.evaluate(recipe, model, variant, recipe.evaluation.select_episodes, stem, envs,
-                                     out / "logs", first_seed=VALIDATION_SEEDS[0])
-            for key in COUNTS:
-                counts[key] += report[key]
-            by_variant[variant] = report["success_rate"]
+            for shift in shifts:
+                name = f"{run}-{recipe.policy.execution}-{step}-{variant}" + ("-shifted" if shift else "")
+                shifted = {"shift": shift} if shift else {}
+                report = stages.evaluate(recipe, model, variant, recipe.evaluation.select_episodes,
+                                         out / "select" / name, envs, out / "logs", first_seed=VALIDATION_SEEDS[0],
+                                         **shifted)
+                for key in COUNTS:
+                    counts[key] += report[key]
+                by_variant[variant + (" shifted" if shift else "")] = report["success_rate"]
         points.append(ValidationPoint(step, round(minutes, 1), success_by_variant=by_variant, **counts))
     return points
 

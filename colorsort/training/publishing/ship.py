@@ -225,6 +225,13 @@ def took(sitting: Sitting) -> str:
     return f"{sitting.wall_s / 60:.0f} min" if sitting.wall_s >= 30 else "every stage reused from an earlier run"
 
 
+# what a README says of running its command again (tests/test_pipeline.py holds the first clause)
+REPRODUCES = ("The same command on the same machine trains the same weights, bit for bit: the data order and the "
+              "image augmentation are drawn from the training seed, the recipe fixes `--num_workers`, and torch's "
+              "threads are fixed (`OMP_NUM_THREADS`, 2 unless the environment sets it). Another thread count, CPU or "
+              "version of torch or LeRobot sums in another order and trains other weights.")
+
+
 def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     """``dest/README.md``: how the policy in ``dest`` was made and scored, from ``results`` (its rows' first
     training seed is the policy's)."""
@@ -294,7 +301,7 @@ Made by `{results.command}` (recipe `{recipe.name}`) on commit {sha}, started {r
 {machine(training.device)}: {demos.counts[-1]} expert demos tried ({demo_line(recipe)}),
 {largest[0].demos} kept, {largest[0].steps} updates at batch {training.batch_size} in
 {largest[0].train_minutes:.0f} min of `lerobot-train`{at}.{dagger} Stages reused from earlier runs of the same command
-count with the time they took then.{added}
+count with the time they took then.{added} {REPRODUCES}
 
 Run it:
 
