@@ -125,3 +125,30 @@ def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_ch
     assert calls == [(v, s) for v in variants for s in ("", recipe.demos.shift)]
     assert point.episodes == 2 * len(variants) * recipe.evaluation.select_episodes
     assert point.successes == len(variants) * recipe.evaluation.select_episodes  # the shifted ones count
+
+
+def test_each_recorded_episode_keeps_what_its_training_ranges_drew(tmp_path):
+    """``colorsort-collect --shift box-size:train,camera-pose:train``: the dataset's ``meta/colorsort.json`` holds, per
+    kept episode number, each shift's level and values, those the benchmark's env draws for that seed; a resumed
+    collection keeps the earlier episodes' and adds its own; a collection without shifts holds none."""
+    import json
+
+    out = tmp_path / "d"
+    shift = "box-size:train,camera-pose:train"
+    assert collect_main(["--episodes", "2", "--cameras", "none", "--shift", shift, "--out", str(out)]) == 0
+    marker = json.loads((out / "meta" / "colorsort.json").read_text())
+    assert sorted(marker["draws"]) == [str(i) for i in marker["episodes"]] == ["0", "1"]
+    env = new_env(shift=shift)
+    try:
+        for number, drawn in marker["draws"].items():
+            env.reset(seed=int(number))
+            assert drawn == json.loads(json.dumps(env.shifts.record))  # as the env draws it for that seed
+            assert set(drawn) == {"box-size", "camera-pose"} and 9.0 < drawn["box-size"]["edge_cm"] < 11.0
+    finally:
+        env.close()
+    assert collect_main(["--episodes", "3", "--cameras", "none", "--shift", shift, "--out", str(out), "--resume"]) == 0
+    again = json.loads((out / "meta" / "colorsort.json").read_text())
+    assert sorted(again["draws"]) == ["0", "1", "2"] and again["draws"]["0"] == marker["draws"]["0"]
+    plain = tmp_path / "plain"
+    assert collect_main(["--episodes", "1", "--cameras", "none", "--out", str(plain)]) == 0
+    assert "draws" not in json.loads((plain / "meta" / "colorsort.json").read_text())

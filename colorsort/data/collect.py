@@ -156,8 +156,9 @@ def merge_and_publish(staging: store.StagingRun) -> None:
         merger(sources, staging.merged, config.repo_id)
         kept = (marker["episodes"] if marker else []) + [i for s in reports for i in s.kept]
         layout = next((s.sim_state for s in reports if s.sim_state), None)
+        draws = {**(marker.get("draws", {}) if marker else {}), **{i: d for s in reports for i, d in s.draws.items()}}
         staging.publish({"settings": config.settings(), "episodes": kept, "tried": sorted(tried), "failed": failed,
-                         "sim_state": layout})
+                         "sim_state": layout, **({"draws": draws} if config.shift else {})})
     elif marker:
         staging.remember(tried, failed)
     staging.discard()

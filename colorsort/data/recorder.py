@@ -58,6 +58,7 @@ class ShardSummary:
     error: str | None = None
     seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(STAGES, 0.0))
     sim_state: dict | None = None  # the sim-state layout of its env (``SimStateLayout.describe``)
+    draws: dict[str, dict] = field(default_factory=dict)  # kept episode number -> its shifts' draws (``--shift``)
 
 
 def episode_time_limit(config: CollectConfig) -> float:
@@ -165,6 +166,8 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
                 if reason == "ok":
                     dataset.save_episode()
                     out.kept.append(index)
+                    if config.shift:
+                        out.draws[str(index)] = env.shifts.record
                 else:
                     dataset.clear_episode_buffer()
                     out.failed[str(index)] = reason

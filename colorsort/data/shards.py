@@ -47,7 +47,7 @@ def shard_name(first: int) -> str:
 def summary_of(root: Path, marker: dict) -> ShardSummary:
     return ShardSummary(str(root), tried=marker["tried"], kept=marker["kept"], failed=marker["failed"],
                        interrupted=marker["interrupted"], error=marker["error"], seconds=marker["seconds"],
-                       sim_state=marker["sim_state"])
+                       sim_state=marker["sim_state"], draws=marker.get("draws", {}))
 
 
 def record(job: ShardJob, ctx: TaskContext) -> ShardSummary:

@@ -3,7 +3,9 @@
 The output directory only ever holds a complete dataset: shards are recorded in a hidden staging
 folder beside it (``.<name>.staging``) and the merged result replaces the output in one rename.
 ``meta/colorsort.json`` (the marker) keeps the settings, the episode number of each dataset
-episode in order, every episode number tried, why failed ones failed, and the sim-state layout.
+episode in order, every episode number tried, why failed ones failed, the sim-state layout, and for data
+recorded under shifts' training ranges (``--shift``) what each kept episode drew (``draws``: its episode number
+-> per shift, its level and values, as ``colorsort-eval --json`` records them).
 The staging folder outlives a run that was killed: its ``run.json`` names the run (an id and the
 settings) that its finished shards belong to, and ``--resume`` keeps them. ``StagingRun`` owns
 that folder for one run: it opens it, lists and checks its shards, and publishes or discards it.
