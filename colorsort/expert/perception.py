@@ -236,8 +236,9 @@ class ColorSensor:
         rgb = self.light_corrected(cv2.GaussianBlur(image, (3, 3), 0))
         hsv = cv2.cvtColor(np.clip(rgb, 0, 255).astype(np.float32) / 255, cv2.COLOR_RGB2HSV)  # S, V in [0, 1]
         valid = (hsv[..., 1] >= self._min_s) & (hsv[..., 2] >= self._min_v) & self.roi
-        labels, distance = self.classes.label(rgb)
-        label_img = np.where(valid, labels, 255).astype(np.uint8)  # (H, W)
+        label_img = np.full(valid.shape, 255, np.uint8)  # (H, W): 255 where no box can be
+        distance = np.full(valid.shape, cfg.tolerance)  # [delta E] to the nearest class
+        label_img[valid], distance[valid] = self.classes.label(rgb[valid])  # only the pixels a box can be
         detections = []
         for k, label in enumerate(self._labels):
             mask = cv2.morphologyEx((label_img == k).view(np.uint8), cv2.MORPH_OPEN, self._kernel)
