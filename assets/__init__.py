@@ -1,1 +1,2 @@
-"""MJCF models of the ColorSort cell, shipped inside the wheel as package data."""
+"""What ships inside the wheel as package data: the MJCF models of the ColorSort cell, the colour sensor's taught
+classes (sensor/) and the learned baselines' model card (templates/)."""

@@ -116,6 +116,23 @@ def test_an_unknown_task_names_the_valid_ones():
         ColorSortEnv(task="ColorSort-Hard-v0")
 
 
+@pytest.mark.parametrize("flag, named", [
+    ("--env.shift=bogus:1", "Valid shifts: ['action-delay'"),
+    ("--env.shift=camera-pose:5", "is not one of [0, 1, 2, 3, 'train']"),
+    ("--env.task=ColorSort-Hard-v0", "Valid tasks: ['ColorSort-Default-v0'"),
+    ("--env.backend=gpu", "valid backends: ['cpu', 'warp']")])
+def test_a_bad_env_flag_ends_lerobots_error_with_the_valid_values(flag, named, tmp_path):
+    """``lerobot-eval --env.type=colorsort`` with a bad task, backend or shift: LeRobot's parser (draccus) stops
+    with one line naming the field and the valid values, no traceback, nothing evaluated."""
+    argv = ["lerobot-eval", "--env.type=colorsort", flag, "--policy.path=baselines/act-state",
+            "--policy.device=cpu", f"--output_dir={tmp_path / 'eval'}"]
+    done = console_script("lerobot-eval", argv[1:], tmp_path)
+    lines = (done.stdout + done.stderr).strip().splitlines()
+    assert done.returncode != 0 and not (tmp_path / "eval").exists()
+    assert lines[-1].startswith(f"error: `env.{flag[6:].split('=')[0]}`: ") and named in lines[-1]
+    assert not any("Traceback" in line for line in lines)
+
+
 def tiny_act(dataset_root, out_dir):
     """A small randomly initialised ACT policy built from a recorded dataset's features, saved as a checkpoint."""
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata

@@ -29,7 +29,7 @@ def test_from_an_arm_pose_of_its_own_it_sorts_every_box(make_env):
     pose = expert.home + np.array([0.5, 0.35, 0.1, 0.8, -0.4, 1.2])
     obs, _ = move_to(env, pose, suction=-1.0, duration=1.5, settle=0.5)
     assert not env.suction_sealed
-    expert.take_over(obs, take_over_view(env))
+    expert.take_over(obs, take_over_view(env.plant))
     assert expert.phase is SorterPhase.CLEAR
     run_until(env, expert, obs, boxes=3, max_time=30.0)
     assert_all_in_their_bins(env, 3)
@@ -45,7 +45,7 @@ def test_a_box_dropped_back_on_the_belt_is_picked_again(make_env):
     obs = expert_until(env, expert, obs, lambda _, o: float(o["robot0_eef_pos"][2]) > cup_z + 0.02)
     obs, _ = move_to(env, obs["robot0_joint_pos"], suction=-1.0, duration=0.05, settle=1.0)  # let go, held still
     assert not env.suction_sealed and env.box_detected  # back at the sensor
-    expert.take_over(obs, take_over_view(env))
+    expert.take_over(obs, take_over_view(env.plant))
     run_until(env, expert, obs, boxes=3, max_time=35.0)
     assert_all_in_their_bins(env, 3)
     assert len(env.grips) == 4  # the dropped box was gripped twice
@@ -57,11 +57,11 @@ def test_a_box_carried_over_the_wrong_bin_goes_to_the_bin_of_its_colour(make_env
     its own bin and sorts the rest."""
     env, expert, obs = make_expert_env(make_env)
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is SorterPhase.MOVE_OVER_BIN)
-    color = take_over_view(env).held
+    color = take_over_view(env.plant).held
     wrong = next(c for c in expert.q_drop if c != color)
     obs, _ = move_to(env, expert.q_drop[wrong][0], suction=1.0, duration=1.5, settle=0.3)
-    assert env.suction_sealed and take_over_view(env).held == color and not env.events  # over the wrong bin
-    expert.take_over(obs, take_over_view(env))
+    assert env.suction_sealed and take_over_view(env.plant).held == color and not env.events  # over the wrong bin
+    expert.take_over(obs, take_over_view(env.plant))
     assert expert.seen_color == color and expert.suction
     run_until(env, expert, obs, boxes=3, max_time=35.0)
     assert_all_in_their_bins(env, 3)
@@ -73,7 +73,7 @@ def test_a_held_box_of_no_bin_colour_goes_back_onto_the_belt_at_the_sensor(make_
     sensor to be looked at again: here the box is in fact red, so the next look sends it to the red bin."""
     env, expert, obs = make_expert_env(make_env)
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is SorterPhase.MOVE_OVER_BIN)
-    color = take_over_view(env).held
+    color = take_over_view(env.plant).held
     expert.take_over(obs, TakeOver("yellow", ()))
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is SorterPhase.RELEASE)
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is not SorterPhase.RELEASE)  # let go of it
@@ -96,9 +96,9 @@ def test_on_a_moving_belt_it_meets_the_boxes_that_passed_the_ray_before_it_took_
     expert = make_expert(env)
     aside = expert.home + np.array([-0.6, 0.2, 0.0, 0.0, 0.3, 0.0])
     obs, _ = move_to(env, aside, suction=-1.0, duration=1.0, settle=0.0)
-    while not take_over_view(env).past_the_ray:
+    while not take_over_view(env.plant).past_the_ray:
         obs, _ = move_to(env, aside, suction=-1.0, duration=0.05, settle=0.0)
-    view = take_over_view(env)
+    view = take_over_view(env.plant)
     assert len(view.past_the_ray) == 1 and not env.events
     expert.take_over(obs, view)
     assert [s.cycle.seen_color for s in expert.queue] == [view.past_the_ray[0].color]
@@ -114,11 +114,11 @@ def test_on_a_moving_belt_a_box_carried_over_the_wrong_bin_goes_to_its_own(make_
     expert = make_expert(env)
     expert.reset(obs)
     obs = expert_until(env, expert, obs, lambda e, _: e.phase is TrackingPhase.MOVE_OVER_BIN)
-    color = take_over_view(env).held
+    color = take_over_view(env.plant).held
     wrong = next(c for c in expert.q_drop if c != color)
     obs, _ = move_to(env, expert.q_drop[wrong][0], suction=1.0, duration=1.0, settle=0.2)
     assert env.suction_sealed and not env.events
-    expert.take_over(obs, take_over_view(env))
+    expert.take_over(obs, take_over_view(env.plant))
     run_until(env, expert, obs, boxes=3, max_time=30.0)
     assert_all_in_their_bins(env, 3)
 
@@ -146,7 +146,7 @@ def test_it_takes_over_from_a_shipped_policy_in_the_middle_of_an_episode(policy_
             assert not terminated
         assert env.env.suction_sealed is sealed and not env.env.events
         expert = make_expert(env.env)
-        expert.take_over(env.raw_obs, take_over_view(env.env))
+        expert.take_over(env.raw_obs, take_over_view(env.env.plant))
         terminated = truncated = False
         while not (terminated or truncated):
             _, _, terminated, truncated, info = env.step(expert.act(env.raw_obs).astype(np.float32))

@@ -7,9 +7,10 @@ bin codes are the CPU cell's enum orders (``boxes.BoxStatus``, ``referee.Outcome
 
 from __future__ import annotations
 
+import typing
+
+import mujoco_warp
 import warp as wp
-from mujoco_warp._src import math as mjmath
-from mujoco_warp._src.types import vec11
 
 from colorsort.batched.arrays import Bodies, Boxes, Controls, Draws, Events, Pool, Rig
 from colorsort.cell.boxes import SPAWN_CLEAR, SPAWN_GAP, BoxStatus
@@ -28,6 +29,32 @@ PLACED, MISPLACED, DROPPED, REJECTED = (wp.constant(OUTCOMES.index(o)) for o in
                                         (Outcome.PLACED, Outcome.MISPLACED, Outcome.DROPPED, Outcome.REJECTED))
 N_BIN_COLORS = wp.constant(len(BIN_COLORS))  # colours 0..2 (red, green, blue) have bins; the others do not
 FLOOR = wp.constant(FLOOR_MARGIN)  # [m] referee: how close to the floor a fallen box's centre is
+# the type of an equality's data in MuJoCo Warp, read off its public Model (its module of types is private)
+vec11 = typing.get_type_hints(mujoco_warp.Model)["eq_data"].dtype
+
+
+@wp.func
+def quat_inv(q: wp.quat) -> wp.quat:
+    """The inverse of a unit quaternion in MuJoCo's order (w, x, y, z), as ``mju_negQuat``."""
+    return wp.quat(q[0], -q[1], -q[2], -q[3])
+
+
+@wp.func
+def mul_quat(u: wp.quat, v: wp.quat) -> wp.quat:
+    """The product of two quaternions in MuJoCo's order (w, x, y, z), as ``mju_mulQuat``."""
+    return wp.quat(u[0] * v[0] - u[1] * v[1] - u[2] * v[2] - u[3] * v[3],
+                   u[0] * v[1] + u[1] * v[0] + u[2] * v[3] - u[3] * v[2],
+                   u[0] * v[2] - u[1] * v[3] + u[2] * v[0] + u[3] * v[1],
+                   u[0] * v[3] + u[1] * v[2] - u[2] * v[1] + u[3] * v[0])
+
+
+@wp.func
+def quat_yaw(q: wp.quat) -> float:
+    """[rad] the heading of the rotation's x axis about z, ``atan2(R[1, 0], R[0, 0])`` of ``mju_quat2Mat(q)``,
+    q in MuJoCo's order (w, x, y, z)."""
+    r00 = q[0] * q[0] + q[1] * q[1] - q[2] * q[2] - q[3] * q[3]
+    r10 = 2.0 * (q[1] * q[2] + q[0] * q[3])
+    return wp.atan2(r10, r00)
 GAP = wp.constant(SPAWN_GAP)  # [m] spawner: a box set down this far above the belt
 CLEAR = wp.constant(SPAWN_CLEAR)  # spawner: box sizes the spawn point must be clear of boxes in play
 
@@ -187,7 +214,7 @@ def seal_make(candidate: wp.array(dtype=int), pool: Pool, boxes: Boxes, cup_body
     body = pool.body[box]
     R = xmat[w, cup_body]
     rel = wp.transpose(R) @ (sim.xpos[w, body] - sim.xpos[w, cup_body])
-    q = mjmath.mul_quat(mjmath.quat_inv(xquat[w, cup_body]), xquat[w, body])
+    q = mul_quat(quat_inv(xquat[w, cup_body]), xquat[w, body])
     eq = pool.weld[box]
     data = eq_data[w, eq]
     data[0] = 0.0
@@ -205,8 +232,7 @@ def seal_make(candidate: wp.array(dtype=int), pool: Pool, boxes: Boxes, cup_body
     held[w] = box
     serial = boxes.serial[w, box]
     if serial >= 0 and serial < grips.shape[1]:
-        M = mjmath.quat_to_mat(q)
-        yaw = wp.degrees(wp.atan2(M[1, 0], M[0, 0]))
+        yaw = wp.degrees(quat_yaw(q))
         grips[w, serial, 0] = wp.sqrt(rel[0] * rel[0] + rel[1] * rel[1])
         grips[w, serial, 1] = wp.mod(yaw + 45.0 + 360.0, 90.0) - 45.0
 

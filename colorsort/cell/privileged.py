@@ -4,12 +4,10 @@ run is told (``Expert.take_over``; DAgger's expert labels the states a learned p
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from colorsort.envs.robosuite_task import ColorSort
+from colorsort.cell.plant import Plant
 
 
 @dataclass(frozen=True)
@@ -38,17 +36,19 @@ class TakeOver:
 NOTHING_HELD = TakeOver(None, ())  # a cell with nothing in the cup and nothing past the ray
 
 
-def take_over_view(env: ColorSort) -> TakeOver:
-    """The held box's colour and the boxes on the belt past the ray, now."""
-    pool, seal, layout = env.plant.pool, env.plant.seal, env.layout
+def take_over_view(plant: Plant) -> TakeOver:
+    """The held box's colour and the boxes on the belt past the ray, now, in the cell ``plant`` (a ``ColorSort``
+    env's ``plant``)."""
+    pool, seal = plant.pool, plant.seal
+    layout = pool.layout
     held = None if seal.held is None else pool.boxes[seal.held].color
-    half = layout.box_size / 2
     on_belt = []
     for box in pool.in_play():
         if box.index == seal.held:
             continue
         x, y, z, qw, qx, qy, qz = (float(v) for v in pool.pose(box))
-        lying = abs(z - (layout.belt_top_z + half)) < 0.01  # not falling, not on its side
+        half = layout.box_size / 2
+        lying = abs(z - (layout.belt_top_z + pool.height(box) / 2)) < 0.01  # not falling, not on its side
         if lying and x + half < layout.sensor_x:  # the belt carries boxes toward -x; its trailing face is past
             yaw = float(np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
             on_belt.append(BeltBox(box.color, x, y, yaw))

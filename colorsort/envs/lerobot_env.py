@@ -18,8 +18,12 @@ the dataset the policy was trained on (``--env.cameras=none`` for a state-only p
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
+import draccus
+from draccus.utils import DecodingError
 from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
@@ -33,6 +37,56 @@ from colorsort.variants import Variant, get_variant, gym_ids
 
 NAMESPACE = "colorsort"
 BACKENDS = ("cpu", "warp")
+
+
+class Checked(str):
+    """A text flag of ``ColorSortEnv`` that draccus checks as it decodes it (``check`` raises ``ConfigError``
+    naming the valid values), so that ``lerobot-eval``'s error ends in that line, not in draccus's "Couldn't
+    instantiate class"."""
+
+    @staticmethod
+    def check(text: str) -> None:
+        raise NotImplementedError
+
+
+class TaskName(Checked):
+    """``--env.task``: a Gymnasium id without its namespace."""
+
+    @staticmethod
+    def check(text: str) -> None:
+        variant_of_task(text)
+
+
+class BackendName(Checked):
+    """``--env.backend``: one of ``BACKENDS``."""
+
+    @staticmethod
+    def check(text: str) -> None:
+        if text not in BACKENDS:
+            raise ConfigError(f"--env.backend={text!r}; valid backends: {list(BACKENDS)}")
+
+
+class ShiftText(Checked):
+    """``--env.shift``: held-out shifts, comma-separated ``NAME:LEVEL``."""
+
+    @staticmethod
+    def check(text: str) -> None:
+        parse_shifts(text)
+
+
+def _decode_checked[T: Checked](cls: type[T]) -> Callable[[Any, Sequence[str]], T]:
+    def decode(raw_value: Any, path: Sequence[str]) -> T:
+        text = str(raw_value)
+        try:
+            cls.check(text)
+        except ConfigError as err:
+            raise DecodingError(path, str(err)) from None
+        return cls(text)
+    return decode
+
+
+for _checked in (TaskName, BackendName, ShiftText):  # draccus's decoder registry: its public way to a custom type
+    draccus.decode.register(_checked, _decode_checked(_checked))
 
 
 def variant_of_task(task: str) -> Variant:
@@ -50,14 +104,14 @@ def variant_of_task(task: str) -> Variant:
 class ColorSortEnv(EnvConfig):
     """ColorSort for LeRobot: ``task`` is the Gymnasium id without its namespace."""
 
-    task: str | None = "ColorSort-v0"
+    task: TaskName = TaskName("ColorSort-v0")  # LeRobot's field is str | None: a task is always named
     fps: int = 20  # control rate [Hz], as recorded
     cameras: str = ",".join(DEFAULT_CAMERAS)  # comma-separated, as colorsort-collect --cameras records; "none"
     image_size: int = DEFAULT_IMAGE_SIZE[0]  # square camera images [px]
     episode_length: int | None = None  # steps before truncation; default: the variant's time limit
-    backend: str = "cpu"  # "cpu": one ColorSortGymEnv per env; "warp": one batched cell (colorsort.batched)
+    backend: BackendName = BackendName("cpu")  # "cpu": one ColorSortGymEnv per env; "warp": one batched cell
     device: str = "cuda:0"  # the batched cell's Warp device (backend warp): cuda:0, or cpu
-    shift: str = ""  # held-out shifts, comma-separated NAME:LEVEL (docs/shifts.md); "" for none
+    shift: ShiftText = ShiftText("")  # held-out shifts, comma-separated NAME:LEVEL (docs/shifts.md); "" for none
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 

@@ -99,7 +99,7 @@ class Expert:
     phase that moves to it), and implements ``handlers``, ``wait_point`` and ``drop_seed``; one that can take over
     a cell in any state (``take_over``) also sets ``CLEAR`` (handled by ``_clear``) and ``OVER_BIN``. Use:
     ``expert = make_expert(env)`` (``expert/factory.py``), ``expert.reset(obs)`` (or, in the middle of an episode,
-    ``expert.take_over(obs, take_over_view(env))``), then ``action = expert.act(obs)`` every step.
+    ``expert.take_over(obs, take_over_view(env.plant))``), then ``action = expert.act(obs)`` every step.
     """
 
     START: Enum
@@ -172,7 +172,7 @@ class Expert:
 
         Args:
             obs: the observation now.
-            view: what no sensor of the cell shows (``cell.privileged.take_over_view(env)``): the held box's
+            view: what no sensor of the cell shows (``cell.privileged.take_over_view(env.plant)``): the held box's
                 colour (ignored when the vacuum switch reports no seal) and the boxes past the ray.
 
         Raises:

@@ -142,7 +142,7 @@ def record_takeovers(config: TakeoverConfig) -> TakeoverSummary:
             if rollout(episode, obs, policy.act, max_steps=steps).ended:
                 summary.failed[seed] = "the episode ended before the handover"
                 continue
-            expert.take_over(gym.raw_obs, take_over_view(gym.env))
+            expert.take_over(gym.raw_obs, take_over_view(gym.env.plant))
             info = rollout(episode, gym.raw_obs, lambda _: expert.act(gym.raw_obs).astype(np.float32),
                            [Labels(gym, dataset, cameras)]).info
             if info["is_success"]:

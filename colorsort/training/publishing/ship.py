@@ -14,12 +14,14 @@ import json
 import math
 import os
 import shutil
+import string
 import subprocess
 from dataclasses import asdict, replace
 from functools import partial
 from pathlib import Path
 
 from colorsort.errors import ConfigError, DataConflictError
+from colorsort.paths import asset_path
 from colorsort.training.dagger_config import DaggerConfig
 from colorsort.training.publishing.run_summary import curve_table, plot_demos, summary_table, table, validation_table
 from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
@@ -232,87 +234,103 @@ REPRODUCES = ("The same command on the same machine trains the same weights, bit
               "version of torch or LeRobot sums in another order and trains other weights.")
 
 
+MODEL_CARD = "templates/model_card.md"  # under colorsort.assets: the README's template (``string.Template``)
+
+
 def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     """``dest/README.md``: how the policy in ``dest`` was made and scored, from ``results`` (its rows' first
-    training seed is the policy's)."""
+    training seed is the policy's), rendered from the model card template (``MODEL_CARD``)."""
     demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
     every_seed = [r for r in results.rows if r.demos_tried == demos.counts[-1]]
     largest = [r for r in every_seed if r.seed == training.seeds[0]]
-    size_mb = policy_bytes(dest) / 1e6
-    inputs = (f"`observation.state` and the cameras {', '.join(demos.cameras)} at {demos.image_size} px, never "
-              "`observation.environment_state`: the policy sees the boxes" if demos.cameras else
-              "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras")
-    backbone = ", its ResNet-18 trained from scratch (no pretrained weights)" if demos.cameras else ""
+    first = largest[0]
+    values = {
+        "name": dest.name, "label": recipe.label, "description": recipe.policy.describe(parameters(dest))
+        + backbone_line(recipe), "inputs": inputs_line(recipe), "size_mb": f"{policy_bytes(dest) / 1e6:.1f}",
+        "stored": stored_line(recipe), "command": results.command, "recipe": recipe.name,
+        "commit": results.commit or "unknown", "started": results.started, "machine": machine(training.device),
+        "tried": demos.counts[-1], "demo_line": demo_line(recipe), "kept": first.demos, "steps": first.steps,
+        "batch": training.batch_size, "train_minutes": f"{first.train_minutes:.0f}",
+        "at": f" (shipped: its checkpoint after {first.checkpoint})" if first.checkpoint is not None else "",
+        "dagger": dagger_line(recipe, first.frames), "sittings": sittings_line(results), "reproduces": REPRODUCES,
+        "dest": dest, "main_variant": evaluation.main_variant,
+        "task": get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/"),
+        "cameras": ",".join(demos.cameras) or "none", "image_size": demos.image_size,
+        "table": table(largest, recipe.label), **more_sections(recipe, results, every_seed, dest)}
+    card = string.Template(Path(asset_path(MODEL_CARD)).read_text())
+    (dest / "README.md").write_text(card.substitute(values))
+
+
+def inputs_line(recipe: Recipe) -> str:
+    """What the policy reads."""
+    demos = recipe.demos
+    if demos.cameras:
+        return (f"`observation.state` and the cameras {', '.join(demos.cameras)} at {demos.image_size} px, never "
+                "`observation.environment_state`: the policy sees the boxes")
+    return "`observation.state` and `observation.environment_state` (the simulator's box state): no cameras"
+
+
+def backbone_line(recipe: Recipe) -> str:
+    """The image encoder's training and augmentation, after the policy's description ("" without cameras)."""
+    training = recipe.training
+    line = ", its ResNet-18 trained from scratch (no pretrained weights)" if recipe.demos.cameras else ""
     if training.image_shift:
-        backbone += f", every training image shifted at random by up to {training.image_shift:g} of its size"
+        line += f", every training image shifted at random by up to {training.image_shift:g} of its size"
     if training.image_relight:
         (b_lo, b_hi), (t_lo, t_hi) = LIGHT_BRIGHTNESS, RELIGHT_TEMPERATURE
-        backbone += f", every training image relit at random (brightness x{b_lo:g}-{b_hi:g}, {t_lo:,}-{t_hi:,} K)"
-    curve = ""
-    if results.curve:
-        curve = (f"\nLearning curve on `{evaluation.main_variant}` (each checkpoint on the first "
-                 f"{evaluation.curve_episodes} "
-                 f"evaluation seeds; `learning_curve.png`):\n\n{curve_table(results.curve)}\n")
-    seeds = ""
+        line += f", every training image relit at random (brightness x{b_lo:g}-{b_hi:g}, {t_lo:,}-{t_hi:,} K)"
+    return line
+
+
+def stored_line(recipe: Recipe) -> str:
+    """How the weights are stored: rounded and averaged as the recipe asks ("" for lerobot-train's own)."""
+    training = recipe.training
+    line = ("" if training.weights == "float32" else
+            f" The weights are stored in {training.weights}, rounded from `lerobot-train`'s float32 before any "
+            "checkpoint was scored: every score here is of these weights (LeRobot loads them into its float32 "
+            "model).")
+    if training.average > 1:
+        line += (f" Each checkpoint's weights are the mean of its own and the {training.average - 1} saved before "
+                 f"it (one every {training.save_every} updates; `colorsort.training.weights.average`).")
+    return line
+
+
+def sittings_line(results: PipelineResults) -> str:
+    """The later sittings: seeds added, run again and kept, or replaced."""
+    line = "".join(f" Training {s.named_seeds()} added later by `{s.command}` on commit {s.commit}, started "
+                   f"{s.started} ({took(s)})." for s in results.added)
+    line += "".join(f" Training {s.named_seeds()} run again by `{s.command}` on commit {s.commit}, started "
+                    f"{s.started} ({took(s)}): it reproduced every episode scored below, and its "
+                    "policy was kept." for s in results.kept)
+    line += "".join(f" Training {s.named_seeds()} first added by `{s.command}` on commit {s.commit} (its policy not "
+                    "kept; run again, it scored otherwise): its rows were replaced by the later sitting's."
+                    for s in results.replaced)
+    return line
+
+
+def more_sections(recipe: Recipe, results: PipelineResults, every_seed: list, dest: Path) -> dict[str, str]:
+    """The README's sections after the scores, each "" where it has nothing to say: every training seed, the seeds'
+    policies kept beside, the checkpoint chosen on validation seeds, the learning curve."""
+    training, evaluation = recipe.training, recipe.evaluation
+    out = dict.fromkeys(("seeds", "beside", "chosen", "curve"), "")
     if len(training.seeds) > 1:
-        seeds = (f"\nThe same data and updates with each of the recipe's {len(training.seeds)} training seeds "
-                 f"({', '.join(map(str, training.seeds))}; this policy is seed {training.seeds[0]}'s):\n\n"
-                 f"{summary_table(every_seed, recipe.label)}\n")
-    chosen = ""
-    if any(r.validation for r in every_seed):
-        chosen = (f"\nThe checkpoint scored (and shipped) is the one of each run that did best on "
-                  f"{evaluation.select_episodes} episodes of each training variant on validation seeds "
-                  f"({VALIDATION_SEEDS[0]} on, never scored; `colorsort.training.selection`):\n\n"
-                  f"{validation_table(every_seed)}\n")
-    at = f" (shipped: its checkpoint after {largest[0].checkpoint})" if largest[0].checkpoint is not None else ""
-    cameras = ",".join(demos.cameras) or "none"
-    dagger = dagger_line(recipe, largest[0].frames)
-    added = "".join(f" Training {s.named_seeds()} added later by `{s.command}` on commit {s.commit}, started "
-                    f"{s.started} ({took(s)})." for s in results.added)
-    added += "".join(f" Training {s.named_seeds()} run again by `{s.command}` on commit {s.commit}, started "
-                     f"{s.started} ({took(s)}): it reproduced every episode scored below, and its "
-                     "policy was kept." for s in results.kept)
-    added += "".join(f" Training {s.named_seeds()} first added by `{s.command}` on commit {s.commit} (its policy not "
-                     "kept; run again, it scored otherwise): its rows were replaced by the later sitting's."
-                     for s in results.replaced)
+        out["seeds"] = (f"\nThe same data and updates with each of the recipe's {len(training.seeds)} training seeds "
+                        f"({', '.join(map(str, training.seeds))}; this policy is seed {training.seeds[0]}'s):\n\n"
+                        f"{summary_table(every_seed, recipe.label)}\n")
     kept = [s for s in training.seeds[1:] if seed_folder(dest, s).is_dir()]
-    beside = ""
     if kept:
         folders = ", ".join(f"`{seed_folder(dest, s).name}/`" for s in kept)
         whose = (f"The policy of training seed {kept[0]} (its checkpoint scored below) is" if len(kept) == 1 else
                  f"The policies of training seeds {', '.join(map(str, kept))} (each its checkpoint scored below) are")
-        beside = (f"\n{whose} in {folders}: `colorsort-eval --policy {seed_folder(dest, kept[0])} --variant "
-                  f"{evaluation.main_variant}`.\n")
-    task = get_variant(evaluation.main_variant).gym_id.removeprefix("colorsort/")
-    sha = results.commit or "unknown"
-    stored = ("" if training.weights == "float32" else
-              f" The weights are stored in {training.weights}, rounded from `lerobot-train`'s float32 before any "
-              "checkpoint was scored: every score here is of these weights (LeRobot loads them into its float32 "
-              "model).")
-    if training.average > 1:
-        stored += (f" Each checkpoint's weights are the mean of its own and the {training.average - 1} saved before "
-                   f"it (one every {training.save_every} updates; `colorsort.training.weights.average`).")
-    (dest / "README.md").write_text(f"""# {dest.name}: a learned baseline for ColorSort, {recipe.label}
-
-{recipe.policy.describe(parameters(dest))}{backbone}, on {inputs}.
-{size_mb:.1f} MB.{stored}
-
-Made by `{results.command}` (recipe `{recipe.name}`) on commit {sha}, started {results.started}, on
-{machine(training.device)}: {demos.counts[-1]} expert demos tried ({demo_line(recipe)}),
-{largest[0].demos} kept, {largest[0].steps} updates at batch {training.batch_size} in
-{largest[0].train_minutes:.0f} min of `lerobot-train`{at}.{dagger} Stages reused from earlier runs of the same command
-count with the time they took then.{added} {REPRODUCES}
-
-Run it:
-
-```
-colorsort-eval --policy {dest} --variant {evaluation.main_variant} --episodes 50
-HF_HUB_OFFLINE=1 lerobot-eval --env.type=colorsort --env.task={task} --env.cameras={cameras} \\
-    --env.image_size={demos.image_size} --policy.path={dest} --policy.device=cpu \\
-    --eval.n_episodes=50 --eval.batch_size=2
-```
-
-Scores (`colorsort-eval`, each variant's fixed evaluation seeds; `scores.json` holds them with every episode):
-
-{table(largest, recipe.label)}
-{seeds}{beside}{chosen}{curve}""")
+        out["beside"] = (f"\n{whose} in {folders}: `colorsort-eval --policy {seed_folder(dest, kept[0])} --variant "
+                         f"{evaluation.main_variant}`.\n")
+    if any(r.validation for r in every_seed):
+        out["chosen"] = (f"\nThe checkpoint scored (and shipped) is the one of each run that did best on "
+                         f"{evaluation.select_episodes} episodes of each training variant on validation seeds "
+                         f"({VALIDATION_SEEDS[0]} on, never scored; `colorsort.training.selection`):\n\n"
+                         f"{validation_table(every_seed)}\n")
+    if results.curve:
+        out["curve"] = (f"\nLearning curve on `{evaluation.main_variant}` (each checkpoint on the first "
+                        f"{evaluation.curve_episodes} evaluation seeds; `learning_curve.png`):\n\n"
+                        f"{curve_table(results.curve)}\n")
+    return out
