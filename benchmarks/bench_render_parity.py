@@ -42,7 +42,7 @@ def run() -> int:
 
     import colorsort  # noqa: F401  (registers the task)
     from colorsort.batched.cell import BatchedCell
-    from colorsort.batched.spec import CellSpec, park_position
+    from colorsort.batched.spec import CellSpec, air_park_position
     from colorsort.benchmark.policies import ExpertPolicy
     from colorsort.envs.gym_env import ColorSortGymEnv
     from colorsort.variants import get_variant
@@ -67,7 +67,7 @@ def run() -> int:
                 parked = [b.index for b in cell.boxes if b.status.value == "parked"]
                 for i in parked:
                     qa = cell.plant.pool.qpos[i]
-                    qpos[qa : qa + 7] = (*park_position(i), 1.0, 0.0, 0.0, 0.0)
+                    qpos[qa : qa + 7] = (*air_park_position(i), 1.0, 0.0, 0.0, 0.0)
                 states.append((seed, step, qpos, cell.mj_model.geom_rgba[spec.box_geom].copy()))
                 cpu_images.append({c: obs["pixels"][c].copy() for c in cameras})
     env.close()

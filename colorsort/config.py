@@ -23,6 +23,9 @@ COLORS: dict[str, tuple[float, float, float, float]] = {
     "purple": (0.55, 0.15, 0.65, 1.0),
 }
 BIN_COLORS: tuple[str, ...] = ("red", "green", "blue")
+# The cell's two implementations: "cpu", a robosuite env per world; "warp", MuJoCo Warp's batched cell
+# (colorsort.batched, imported only when chosen: the default install has no Warp).
+BACKENDS: tuple[str, ...] = ("cpu", "warp")
 BOX, CYLINDER = 6, 5  # MuJoCo's mjGEOM_BOX and mjGEOM_CYLINDER (tests/test_shifts.py holds them to mujoco's)
 # Colours no variant and no recipe has: the ``novel-distractors`` shift's objects (``colorsort.shifts``). A task
 # config cannot name them, and they have no place in the ``next_box`` one-hot, so no policy ever trains on them.

@@ -25,7 +25,7 @@ REPO = Path(__file__).resolve().parent.parent
 RESULTS = REPO / "docs" / "results"
 
 
-def machine() -> str:
+def this_machine() -> str:
     """This machine in a line: CPU model, cores, memory, OS, Python, GPU."""
     cpu = platform.processor() or platform.machine()
     try:
@@ -83,5 +83,5 @@ def recorded(script: str, argv: list[str] | None = None) -> Iterator[None]:
     minutes = (dt.datetime.now(dt.UTC) - started).total_seconds() / 60
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(f"# `{command}`\n\nWritten by the command above on {started:%Y-%m-%d %H:%M} UTC "
-                    f"({minutes:.1f} min), on: {machine()}.\n\n```\n{tee.copy.getvalue().rstrip()}\n```\n")
+                    f"({minutes:.1f} min), on: {this_machine()}.\n\n```\n{tee.copy.getvalue().rstrip()}\n```\n")
     print(f"figures: {path.relative_to(REPO) if path.is_relative_to(REPO) else path}")

@@ -99,3 +99,15 @@ def get_robot(name: str) -> RobotSpec:
     if name not in ROBOTS:
         raise ConfigError(f"Unknown robot {name!r}. Valid robots: {list(ROBOTS)}")
     return ROBOTS[name]
+
+
+def checked_robot(robots: str | list[str], gripper_types: str) -> str:
+    """The one robot ``robots`` names, checked with its gripper; ``ConfigError`` naming the valid ones otherwise."""
+    robot_list = [robots] if isinstance(robots, str) else list(robots)
+    if len(robot_list) != 1 or robot_list[0] not in ROBOTS:
+        raise ConfigError(f"ColorSort takes one robot; got {robots!r}. Valid robots: {list(ROBOTS)}")
+    if gripper_types not in GRIPPERS:
+        raise ConfigError(f"Unknown gripper {gripper_types!r}. Valid grippers: {list(GRIPPERS)}")
+    if gripper_types == "default" and robot_list[0] != "IRB140":
+        raise ConfigError(f"{robot_list[0]}'s default gripper cannot pick 0.1 m boxes; use 'SuctionGripper'")
+    return robot_list[0]

@@ -9,12 +9,13 @@ expert's; a sweep's journal of finished episodes holds them too (``colorsort.ben
 
 from __future__ import annotations
 
-EXPERT = 2  # colorsort/expert: the scripted demonstrator's actions, from what it sees (2: the touch-off)
-CELL = 1  # colorsort/cell: physics, the belt, the seal, the referee, the box stream, rendering
-RECORDER = 2  # colorsort/data: what a recorded frame and a dataset's metadata hold (2: each episode's draws)
-SHIFTS = 1  # colorsort/shifts: what each held-out shift draws and changes at each level
+EXPERT_VERSION = 2  # colorsort/expert: the scripted demonstrator's actions, from what it sees (2: the touch-off)
+CELL_VERSION = 1  # colorsort/cell: physics, the belt, the seal, the referee, the box stream, rendering
+RECORDER_VERSION = 2  # colorsort/data: what a recorded frame and a dataset's metadata hold (2: each episode's draws)
+SHIFTS_VERSION = 1  # colorsort/shifts: what each held-out shift draws and changes at each level
 
-VERSIONS: dict[str, int] = {"expert": EXPERT, "cell": CELL, "recorder": RECORDER, "shifts": SHIFTS}
+VERSIONS: dict[str, int] = {"expert": EXPERT_VERSION, "cell": CELL_VERSION, "recorder": RECORDER_VERSION,
+                           "shifts": SHIFTS_VERSION}
 
 
 def code_versions(*parts: str) -> dict[str, int]:

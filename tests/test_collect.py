@@ -306,7 +306,7 @@ def test_late_pass_holds_the_belt_back_and_stores_the_experts_action(tmp_path):
         ray, running = state[:, -2] > 0.5, state[:, -1] > 0.5
         return int(np.sum((action[:, -1] > 0) & ray & ~running)), int(np.sum(action[:, -1] > 0))
 
-    delay = int(np.random.default_rng([2, late_pass.STREAM]).integers(0, 10))  # the hook's first draw, seed 2
+    delay = int(np.random.default_rng([2, late_pass.LATE_PASS_STREAM]).integers(0, 10))  # the hook's first draw, seed 2
     assert delay > 0
     (plain_late, plain_on), (late, on) = late_frames(0), late_frames(9)
     assert plain_late == 1  # the expert's own let-through: one frame of "box at the ray, belt stopped"
@@ -334,7 +334,7 @@ def test_late_pick_holds_the_arm_at_a_picks_start_and_stores_the_experts_approac
         at_ray = np.flatnonzero(ray & ~running & ~suction & still)
         return state, action, at_ray, np.array(table["observation.environment_state"])[0]
 
-    delay = int(np.random.default_rng([0, late_pick.STREAM]).integers(0, 10))  # the hook's first draw, seed 0
+    delay = int(np.random.default_rng([0, late_pick.LATE_PICK_STREAM]).integers(0, 10))  # the hook's first draw, seed 0
     assert delay > 0
     (state0, action0, plain, box0), (state, action, held, box) = waiting_frames(0), waiting_frames(9)
     np.testing.assert_array_equal(box, box0)  # the same box, where the plain run had it
@@ -366,7 +366,7 @@ def test_a_late_pick_holds_only_an_expert_that_starts_approaching(capsys):
 
     from colorsort.data.perturbations import late_pick
 
-    delay = int(np.random.default_rng([0, late_pick.STREAM]).integers(0, 10))
+    delay = int(np.random.default_rng([0, late_pick.LATE_PICK_STREAM]).integers(0, 10))
     stored, executed = run(Fixed(3), steps=4 + delay)
     assert stored[:2] == executed[:2] == [1.0, 2.0]  # before the approach: the expert's own
     assert stored[2:3 + delay] == [3.0] * (1 + delay)  # the approach's first action, stored on every held frame
@@ -382,7 +382,7 @@ def test_a_late_pass_holds_the_belt_pass_and_is_off_at_zero():
     hook = LatePass(9).episode(2, expert=None)
     from colorsort.data.perturbations import late_pass
 
-    delay = int(np.random.default_rng([2, late_pass.STREAM]).integers(0, 10))
+    delay = int(np.random.default_rng([2, late_pass.LATE_PASS_STREAM]).integers(0, 10))
     steps = [perturbed([hook], lambda: Step(action, action)) for _ in range(delay + 1)]
     assert all(s.stored is action for s in steps)
     assert [float(s.executed[-1]) for s in steps] == [-1.0] * delay + [1.0]

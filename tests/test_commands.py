@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 from helpers import console_script, exit_status
 
+from colorsort.benchmark.eval_command import SweepConfig
 from colorsort.cli import collect as collect_cli
 from colorsort.cli import eval as eval_cli
 from colorsort.data.perturbations.brightness import Brightness
@@ -65,7 +66,7 @@ def test_eval_reads_the_old_spellings_and_draccus_s_alike():
     assert old == new and old.shift == ("camera-pose:2", "box-size:1") and old.report.videos == 0
     swept = eval_cli.parse_args(["--sweep", "--sweep-shifts", "image-noise,action-delay", "--levels", "1,2",
                                  "--side-episodes", "1"])
-    assert swept.sweep == eval_cli.SweepConfig(True, ("image-noise", "action-delay"), (1, 2), 1)
+    assert swept.sweep == SweepConfig(True, ("image-noise", "action-delay"), (1, 2), 1)
     assert eval_cli.parse_args(["--executor", "ray", "--address", "auto"]).executor == ExecutorConfig("ray", 1, 2,
                                                                                                       "auto")
 

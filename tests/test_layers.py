@@ -127,9 +127,7 @@ def test_no_module_imports_another_packages_private_modules():
 
 
 # Functions still over 60 lines, each to be split where the split names a concept (issue #117); none may join them.
-LONG_FUNCTIONS = {"colorsort.batched.cell.__init__", "colorsort.cli.config_args.respell", "colorsort.cli.eval.main",
-                  "colorsort.data.recorder.record_shard", "colorsort.envs.robosuite_task.__init__",
-                  "colorsort.executors.ray.run", "colorsort.training.pipeline.run_pipeline"}
+LONG_FUNCTIONS = {"colorsort.batched.cell.__init__", "colorsort.cli.config_args.respell"}
 
 
 def test_no_function_grows_past_60_lines():
@@ -198,8 +196,7 @@ def test_no_private_name_crosses_a_module():
 PER_MODULE = {"main", "parse_args", "SPELLING", "PRELOAD"}
 # public names still defined in two modules with two meanings ("one name per concept"): to be renamed; none may be
 # added to this list
-TWO_MEANINGS = {"park_position", "BACKENDS", "machine", "evaluate", "headline", "fill", "collect", "STREAM",
-                "register", "merge", "SHIFTS", "label", "parameters"}
+TWO_MEANINGS: set[str] = set()
 
 
 def test_a_public_name_is_defined_in_one_module():

@@ -453,7 +453,8 @@ def test_a_shorter_run_is_the_start_of_a_longer_one_under_a_constant_learning_ra
 def test_a_variant_with_its_own_box_count_is_collected_with_it(tmp_path, in_process):
     """``boxes_by_variant``: the seed variant's demos hold one box each, in a part of their own, merged; the merged
     set's key comes from its parts, so another mix is another set, never the seed variant's trained on."""
-    from colorsort.training.pipeline_stages import collect, size
+    from colorsort.training.pipeline_stages import collect_demos as collect
+    from colorsort.training.pipeline_stages import size
 
     recipe = get_recipe("state", {"demos.train_mix": (("seed", 1.0),), "demos.counts": (1,),
                                   "demos.boxes_by_variant": (("seed", 1),), "demos.late_pass": LatePass(0)})
@@ -476,7 +477,8 @@ def test_a_recipes_perturbations_reach_colorsort_collect_where_they_apply(tmp_pa
     and keys their parts: dim lights for the random-lights variant alone, late picks for both; ``--no-turn`` too.
     One that applies to no training variant (late picks on a tracking belt, dim lights without a lit variant) is
     refused, and a bad value names its range."""
-    from colorsort.training.pipeline_stages import collect, collect_command, size
+    from colorsort.training.pipeline_stages import collect_command, size
+    from colorsort.training.pipeline_stages import collect_demos as collect
 
     recipe = colorsort_baseline.chosen_recipe([
         "--recipe", "state", "--demos.train_mix=lighting:1,default:1", "--demos.counts=2",
@@ -563,10 +565,10 @@ def fake_stages(monkeypatch, successes, minutes_each) -> list[tuple[str, str, in
         fake_run(run_dir, steps, None, started=1e9, seconds_each=minutes_each(seed))
         return run_dir, json.loads(run_dir.with_name(run_dir.name + ".json").read_text())
 
-    monkeypatch.setattr(stages, "collect", lambda recipe, n, out, workers: out / "data" / f"demos-{n}")
+    monkeypatch.setattr(stages, "collect_demos", lambda recipe, n, out, workers: out / "data" / f"demos-{n}")
     monkeypatch.setattr(stages, "size", lambda data: (4, 400))
     monkeypatch.setattr(stages, "train", fake_train)
-    monkeypatch.setattr(stages, "evaluate", fake_evaluate)
+    monkeypatch.setattr(stages, "score_policy", fake_evaluate)
     monkeypatch.setattr(ship, "parameters", lambda model: 1000)  # the fake runs' weights are text
     return evaluated
 
@@ -747,7 +749,7 @@ def test_training_seeds_run_in_a_later_sitting_join_the_baseline_shipped_before(
     assert "| 1001 | 3 (chosen) |" in readme
     assert "38% (25-50%), 2 seeds | 25%, 50%" in tables.render(after, "table")  # seed 1000: 1 of 4, 1001: 2 of 4
     page = f"<!-- scores {shipped.name} table -->\n<!-- end scores -->"
-    assert f"; seed 1001 added by {sitting.command}):" in tables.fill(page, tmp_path)
+    assert f"; seed 1001 added by {sitting.command}):" in tables.fill_baseline_tables(page, tmp_path)
     assert colorsort_baseline.main(later + ["--add-to", str(shipped)]) == 2  # seed 1001 is there now
     assert "already holds training seeds [1001] with their policies" in capsys.readouterr().err
 

@@ -232,7 +232,7 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
     assert json.loads(json.dumps(stored)) == stored
     assert stored["demos"]["perturbations"] == {"brightness": [0.45, 0.75], "late_pass": 100, "late_pick": 10}
     assert stored["policy"]["type"] == "act" and stored["training"]["steps"] == 4000
-    from colorsort.training.publishing.tables import label
+    from colorsort.training.publishing.tables import method_label as label
     from colorsort.training.results_file import PipelineResults
 
     assert label(PipelineResults.from_json(scores([], stored))) == "ACT, snapshot"
@@ -242,7 +242,7 @@ def test_a_recipe_is_stored_with_its_results_as_json_in_its_sections():
 
 def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themselves():
     from colorsort.cli.baseline import parse_args
-    from colorsort.training.publishing.tables import label
+    from colorsort.training.publishing.tables import method_label as label
     from colorsort.training.results_file import PipelineResults
 
     recipe = get_recipe("state", {"dagger.rounds": 2, "dagger.episodes": 4, "dagger.handover": (10, 50)})
@@ -273,7 +273,7 @@ def test_dagger_rounds_are_recipe_settings_that_name_the_method_and_check_themse
 
 def test_averaged_checkpoints_name_the_method_and_leave_its_inputs_apart():
     from colorsort.training.method_names import method_name
-    from colorsort.training.publishing.tables import label
+    from colorsort.training.publishing.tables import method_label as label
     from colorsort.training.results_file import PipelineResults
 
     recipe = get_recipe("camera-tracking", {"training.average": 2})
@@ -325,7 +325,8 @@ def test_documented_recipe_list_runs_verbatim():
 def test_docs_tables_are_the_ones_scores_json_gives():
     """Every scores block in README and docs/ is what `python tools/baseline_tables.py` writes from its JSON;
     every shipped baseline with scores.json has its table in the docs."""
-    from colorsort.training.publishing.tables import fill, pages
+    from colorsort.training.publishing.tables import fill_baseline_tables as fill
+    from colorsort.training.publishing.tables import pages
 
     text = {page: page.read_text() for page in pages(REPO)}
     for page, body in text.items():
@@ -344,7 +345,7 @@ def test_training_times_over_seeds_read_as_one_figure_when_they_round_alike():
 
 
 def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
-    from colorsort.training.publishing.tables import fill
+    from colorsort.training.publishing.tables import fill_baseline_tables as fill
 
     stale = "before\n<!-- scores baselines/act-camera curve -->\n| old | numbers |\n<!-- end scores -->\nafter\n"
     new = fill(stale, REPO)
@@ -358,7 +359,7 @@ def test_a_stale_scores_block_is_rewritten_and_a_bad_one_refused():
 
 def test_the_headline_gives_a_baseline_of_several_seeds_its_mean_and_range(tmp_path):
     """One seed: the rate with its Wilson interval; three seeds: their mean and range, never one cell per seed."""
-    from colorsort.training.publishing.tables import headline
+    from colorsort.training.publishing.tables import baselines_headline as headline
 
     def row(variant: str, seed: int, rate: float) -> dict:
         return score_row(variant=variant, seed=seed, success_rate=rate, success_ci95=[rate - 0.1, rate + 0.05])
@@ -489,7 +490,8 @@ def test_the_headline_compares_methods_with_their_size_and_where_they_trained(tm
     torch counts them), the machine from the recipe's device, each README linked from the page that shows it."""
     from safetensors.torch import load_file
 
-    from colorsort.training.publishing.tables import headline, parameters
+    from colorsort.training.publishing.tables import baselines_headline as headline
+    from colorsort.training.publishing.tables import parameters
 
     weights = load_file(SHIPPED["act-state"] / "model.safetensors")
     assert parameters(SHIPPED["act-state"]) == sum(t.numel() for t in weights.values())
@@ -507,3 +509,30 @@ def test_the_headline_compares_methods_with_their_size_and_where_they_trained(tm
     (tmp_path / "baselines" / "dp" / "scores.json").write_text(json.dumps(scores([score_row()], recipe)))
     (line,) = headline(tmp_path / "baselines", tmp_path / "docs").splitlines()[2:]
     assert " demos (expert `press:0.01,track_hold_time:0.15`), " in line
+
+
+def test_the_pipeline_runs_its_evaluations_and_labels_from_typed_configs_that_parse_back():
+    """The evaluation and label stages build ``colorsort-eval``'s and ``colorsort-takeover``'s typed configurations,
+    run the flags those write (which parse back into the same configuration) and key their caches on the
+    configuration's settings: where the episodes run is no part of a key, every setting that changes them is."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from colorsort.cli.eval import parse_args as eval_args
+    from colorsort.cli.takeover import parse_args as takeover_args
+    from colorsort.training import pipeline_stages as stages
+
+    touch = get_recipe("camera-snapshot-touch-dr")
+    dip = get_recipe("camera-tracking", {"demos.expert": (("press", 0.01), ("track_hold_time", 0.15)),
+                                         "demos.turn_to_box": False, "evaluation.episode_length": 300})
+    for recipe, variant, seed, shift in ((touch, "jitter", 20000, touch.evaluation.select_shift),
+                                         (dip, "tracking", None, "")):
+        config = replace(stages.eval_config(recipe, Path("run/pretrained_model"), variant, 10, 2, seed, shift),
+                         json="out.json", resume=True)
+        assert eval_args(config.argv()) == config
+        again = stages.eval_config(recipe, Path("run/pretrained_model"), variant, 10, 8, seed, shift)
+        assert again.settings() == config.settings()  # 8 envs or 2: the same episodes
+        assert stages.eval_config(recipe, Path("m"), variant, 11, 2, seed, shift).settings() != config.settings()
+    model = Path("out/train/run/checkpoints/001000/pretrained_model")
+    label = replace(stages.label_config(dip, model, "tracking-jitter", 1, 2), out="labels")
+    assert takeover_args(label.argv()) == label and not label.turn_to_box and label.expert == dip.demos.expert

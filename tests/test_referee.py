@@ -41,3 +41,27 @@ def test_tally_counts_each_outcome_and_judges_robosuites_success():
     assert tally.success(2) and not tally.success(3) and not tally.failed
     tally.count(events(M)[0])
     assert tally.misplaced == 1 and tally.failed and not tally.success(2)
+
+
+def test_one_rule_and_one_tally_for_the_cpu_cell_the_gym_env_and_the_batched_cell():
+    """Random episodes' events: ``EpisodeTally`` (the rollout's results and the Gymnasium env's info), ``judge`` and the
+    batched cell's array tally agree on every count, on success, and on when the episode ends (``episode_rule``)."""
+    import numpy as np
+
+    from colorsort.batched.evaluate import tally
+    from colorsort.cell.referee import BoxEvent, EpisodeTally, Outcome, episode_rule, judge
+
+    outcomes, rng, boxes = list(Outcome), np.random.default_rng(0), 3
+    for _ in range(200):
+        drawn = rng.integers(len(outcomes), size=int(rng.integers(0, 6)))
+        events = [BoxEvent(float(t), t, "red", outcomes[o], "red" if outcomes[o] is Outcome.PLACED else None)
+                  for t, o in enumerate(drawn)]
+        cpu = EpisodeTally.of(events, boxes)
+        padded = np.full((1, 8), -1)
+        padded[0, : len(drawn)] = drawn
+        warp = tally(np.array([len(drawn)]), padded, boxes)
+        assert cpu.verdict == judge(events, boxes)
+        assert all(cpu.counts[o] == warp[o.value][0] for o in Outcome)
+        assert cpu.verdict.success == warp["success"][0] and cpu.verdict.failed == warp["failed"][0]
+        _, ended = episode_rule(cpu.verdict.done, cpu.verdict.failed)
+        assert ended == warp["terminated"][0] == (cpu.verdict.done or cpu.verdict.failed)

@@ -119,7 +119,7 @@ def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_ch
         return {"episodes": episodes, "successes": episodes if shift else 0, "correct": 0, "misplaced": 0,
                 "dropped": 0, "success_rate": 1.0 if shift else 0.0}
 
-    monkeypatch.setattr(stages, "evaluate", fake_evaluate)
+    monkeypatch.setattr(stages, "score_policy", fake_evaluate)
     (point,) = validate(recipe, "run", [(1000, 5.0, Path("model"))], tmp_path, 1)
     variants = recipe.demos.train_variants
     assert calls == [(v, s) for v in variants for s in ("", recipe.demos.shift)]

@@ -35,9 +35,9 @@ def part_name(recipe_name: str = "camera-snapshot") -> str:
 
 def test_a_cache_key_changes_with_the_experts_version_and_not_with_a_renamed_flag(monkeypatch):
     before = part_name()
-    monkeypatch.setitem(versions.VERSIONS, "expert", versions.EXPERT + 1)
+    monkeypatch.setitem(versions.VERSIONS, "expert", versions.EXPERT_VERSION + 1)
     assert part_name() != before  # demos of another expert are never reused
-    monkeypatch.setitem(versions.VERSIONS, "expert", versions.EXPERT)
+    monkeypatch.setitem(versions.VERSIONS, "expert", versions.EXPERT_VERSION)
     assert part_name() == before
 
     def renamed(config):  # as if colorsort-collect's --boxes-per-episode were renamed --boxes
@@ -51,8 +51,8 @@ def test_a_cache_key_changes_with_the_experts_version_and_not_with_a_renamed_fla
 def test_workers_key_nothing_and_the_key_holds_the_code_versions():
     recipe = get_recipe("camera-snapshot")
     one, two = (part_settings(collect_config(recipe, "jitter", 2, 8, w)) for w in (1, 2))
-    assert one == two and one["code"] == {"expert": versions.EXPERT, "cell": versions.CELL,
-                                          "recorder": versions.RECORDER}
+    assert one == two and one["code"] == {"expert": versions.EXPERT_VERSION, "cell": versions.CELL_VERSION,
+                                          "recorder": versions.RECORDER_VERSION}
     assert one["collect"]["episodes"] == 8 and one["collect"]["variant"] == "jitter"
 
 
@@ -62,6 +62,6 @@ def test_the_recorded_fingerprints_file_names_every_version():
 
 def test_demos_recorded_under_the_shifts_training_ranges_are_keyed_on_the_shifts_version(monkeypatch):
     randomised, plain = part_name("camera-snapshot-dr"), part_name()
-    monkeypatch.setitem(versions.VERSIONS, "shifts", versions.SHIFTS + 1)
+    monkeypatch.setitem(versions.VERSIONS, "shifts", versions.SHIFTS_VERSION + 1)
     assert part_name("camera-snapshot-dr") != randomised  # demos of other shifts are never reused
     assert part_name() == plain  # demos recorded without shifts keep their key

@@ -13,7 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from colorsort.training.publishing.tables import fill, pages
+from colorsort.training.publishing.tables import fill_baseline_tables, pages
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -25,7 +25,7 @@ def main() -> int:
     stale = []
     for page in pages(ROOT):
         text = page.read_text()
-        new = fill(text, ROOT, page)
+        new = fill_baseline_tables(text, ROOT, page)
         if new != text:
             stale.append(page.relative_to(ROOT))
             if not args.check:

@@ -15,7 +15,16 @@ import json
 import sys
 from pathlib import Path
 
-from colorsort.benchmark.shift_tables import fill, full_table, headline, heatmap, load, summary, sweep_name, sweep_page
+from colorsort.benchmark.shift_tables import (
+    fill_shift_tables,
+    full_table,
+    heatmap,
+    load,
+    shifts_headline,
+    summary,
+    sweep_name,
+    sweep_page,
+)
 
 ROOT = Path(__file__).resolve().parent.parent
 SUMMARIES = ROOT / "docs" / "results" / "shifts"
@@ -42,12 +51,12 @@ def main() -> int:
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "shifts.md").write_text(headline(sweeps) + "\n\n" + full_table(sweeps) + "\n")
+        (out / "shifts.md").write_text(shifts_headline(sweeps) + "\n\n" + full_table(sweeps) + "\n")
         heatmap(sweeps, out / "shift_heatmap.png")
         print(f"wrote {out / 'shifts.md'}, {out / 'shift_heatmap.png'}")
         return 0
     stale = []
-    pages = {page: fill(page.read_text(), sweeps) for page in PAGES}
+    pages = {page: fill_shift_tables(page.read_text(), sweeps) for page in PAGES}
     pages |= {source / f"{sweep_name(s)}.md": sweep_page(s) for s in sweeps}  # every arm of each sweep
     for page, new in pages.items():
         text = page.read_text() if page.exists() else ""

@@ -31,7 +31,7 @@ from colorsort.batched import kernels as K
 from colorsort.batched.cameras import BatchedCameras, warp_matids
 from colorsort.batched.observe import observation_layout, observe
 from colorsort.batched.schedule import episode_draws
-from colorsort.batched.spec import CellSpec, copy_model, park_position
+from colorsort.batched.spec import CellSpec, air_park_position, copy_model
 from colorsort.cell.observation import BOX_STATE, StateLayout
 from colorsort.cell.referee import SETTLED_SPEED
 from colorsort.cell.suction import SEAL_ANGLE_DEG
@@ -135,7 +135,7 @@ class BatchedCell:
             of_geom = np.full(m.ngeom, -1, np.int32)
             of_geom[s.box_geom] = np.arange(P)
             self.box_of_geom = i32(of_geom)
-            self.park_pos = wp.array(np.array([park_position(i) for i in range(P)], np.float32), dtype=wp.vec3)
+            self.park_pos = wp.array(np.array([air_park_position(i) for i in range(P)], np.float32), dtype=wp.vec3)
             self.palette = wp.array(np.array(list(COLORS.values()), np.float32), dtype=wp.vec4)
             self.qpos0 = wp.array(np.repeat(s.qpos0[None].astype(np.float32), n, 0), dtype=float)
             zi = lambda *shape: wp.zeros(shape, dtype=int)  # noqa: E731

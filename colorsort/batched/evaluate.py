@@ -29,7 +29,7 @@ from colorsort.benchmark.episode_result import EpisodeResult, box_record
 from colorsort.benchmark.lockstep import BatchedPolicy, EpisodePlan, WaveTiming, run_rolling, run_waves
 from colorsort.benchmark.metrics import EvalReport, aggregate
 from colorsort.benchmark.report_page import choose_films
-from colorsort.cell.referee import BoxEvent, Outcome
+from colorsort.cell.referee import BoxEvent, Outcome, episode_rule
 from colorsort.config import BIN_COLORS
 from colorsort.errors import ConfigError
 from colorsort.variants import Variant, get_variant
@@ -42,7 +42,9 @@ def tally(n_events: np.ndarray, outcome: np.ndarray, boxes: int) -> dict[str, np
     count = {o: ((outcome[:, :boxes] == OUTCOMES.index(o)) & counted).sum(1) for o in Outcome}
     failed = count[Outcome.MISPLACED] + count[Outcome.DROPPED] > 0
     done = n_events >= boxes
-    return {"done": done, "success": done & ~failed, "failed": failed, **{o.value: c for o, c in count.items()}}
+    success, terminated = episode_rule(done, failed)
+    return {"done": done, "success": success, "failed": failed, "terminated": terminated,
+            **{o.value: c for o, c in count.items()}}
 
 
 def episode_result(record: Record, world: int, variant: Variant, steps: int, sim_time: float) -> EpisodeResult:
@@ -76,8 +78,7 @@ class WarpCells:
         return self.cell.step(actions)
 
     def ended(self) -> np.ndarray:
-        counts = tally(self.cell.n_events.numpy(), self.cell.ev_outcome.numpy(), self.variant.boxes)
-        return counts["done"] | counts["failed"]
+        return tally(self.cell.n_events.numpy(), self.cell.ev_outcome.numpy(), self.variant.boxes)["terminated"]
 
     def results(self, worlds: np.ndarray, steps: np.ndarray) -> list[EpisodeResult]:
         if not len(worlds):

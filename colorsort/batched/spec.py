@@ -25,7 +25,7 @@ PARK_ORIGIN = (10.0, 10.0, 5.0)
 PARK_SPACING = 0.5
 
 
-def park_position(index: int) -> tuple[float, float, float]:
+def air_park_position(index: int) -> tuple[float, float, float]:
     """Where pooled box ``index`` waits while parked on the batched cell [m]."""
     x, y, z = PARK_ORIGIN
     return (x + PARK_SPACING * index, y, z)
@@ -114,7 +114,7 @@ class CellSpec:
         qpos0 = env.mj_data.qpos.copy()
         qvel0 = np.zeros(model.nv)
         for i, qa in enumerate(pool.qpos):
-            qpos0[qa : qa + 7] = (*park_position(i), 1.0, 0.0, 0.0, 0.0)
+            qpos0[qa : qa + 7] = (*air_park_position(i), 1.0, 0.0, 0.0, 0.0)
         qpos0[plant.belt.qpos] = 0.0
         arm_act = np.asarray(robot._ref_actuators_indexes_dict["right"], int)
         grip_act = int(robot._ref_actuators_indexes_dict["right_gripper"][0])

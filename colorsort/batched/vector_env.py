@@ -99,14 +99,13 @@ class BatchedVectorEnv(gym.vector.VectorEnv):
             self._seeds = np.asarray(seed, np.int64)
         self.steps[:] = 0
         out = self.cell.reset(self._seeds)
-        return self._observation(out), self._info()
+        return self._observation(out), self._info()[0]
 
     def step(self, actions):
         actions = np.asarray(actions, np.float32)
         out = self.cell.step(actions)
         self.steps += 1
-        info = self._info()
-        terminated = info["is_success"] | info["failed"]
+        info, terminated = self._info()
         truncated = ~terminated & (self.steps >= self._max_episode_steps)
         obs = self._observation(out)
         reward = out.reward.cpu().numpy().astype(np.float64)
@@ -148,11 +147,12 @@ class BatchedVectorEnv(gym.vector.VectorEnv):
             obs = {"pixels": {c: out.images[c].cpu().numpy() for c in self.cameras}, **obs}
         return obs
 
-    def _info(self) -> dict[str, np.ndarray]:
-        """``ColorSortGymEnv``'s counters, one row per env (the first ``variant.boxes`` boxes of each episode)."""
+    def _info(self) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        """``ColorSortGymEnv``'s counters, one row per env (the first ``variant.boxes`` boxes of each episode), and
+        which episodes ended (``referee.episode_rule``)."""
         n_events = self.cell.n_events.numpy()
         t = tally(n_events, self.cell.ev_outcome.numpy(), self.variant.boxes)
         return {"is_success": t["success"], "failed": t["failed"], "correct": t[Outcome.PLACED.value],
                 "misplaced": t[Outcome.MISPLACED.value], "dropped": t[Outcome.DROPPED.value],
                 "let_through": t[Outcome.REJECTED.value], "boxes_done": np.minimum(n_events, self.variant.boxes),
-                "sim_time": self.steps / self.cell.spec.control_freq}
+                "sim_time": self.steps / self.cell.spec.control_freq}, t["terminated"]

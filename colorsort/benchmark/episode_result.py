@@ -8,8 +8,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any
 
-from colorsort.cell.referee import BoxEvent, Outcome, judge, outcome_counts
-from colorsort.config import is_distractor
+from colorsort.cell.referee import BoxEvent, EpisodeTally, Outcome
 
 
 def box_record(event: BoxEvent, offset: float, yaw_deg: float, grip_offset: float | None,
@@ -55,16 +54,14 @@ class EpisodeResult:
                boxes: list[dict[str, Any]], shift: dict[str, Any] | None = None) -> EpisodeResult:
         """The result of an episode whose first ``expected`` boxes count (``referee.judge``), ``events`` the
         boxes that left play in order and ``boxes`` their records."""
-        counted = list(events[:expected])
-        verdict = judge(counted, expected)
-        count = outcome_counts(counted)
+        tally = EpisodeTally.of(events, expected)
+        verdict, count = tally.verdict, tally.counts
         return cls(seed=seed, success=verdict.success,
                    ended="success" if verdict.success else "failed" if verdict.failed else "time limit",
                    steps=steps, correct=count[Outcome.PLACED], misplaced=count[Outcome.MISPLACED],
                    dropped=count[Outcome.DROPPED], let_through=count[Outcome.REJECTED],
-                   distractors=sum(is_distractor(e.color) for e in counted), sim_time=sim_time,
-                   sorted_times=[e.time for e in counted if e.outcome.handled_right], boxes=boxes[:expected],
-                   shift=dict(shift or {}))
+                   distractors=tally.distractors, sim_time=sim_time, sorted_times=tally.sorted_times,
+                   boxes=boxes[:expected], shift=dict(shift or {}))
 
     def to_json(self) -> dict[str, Any]:
         """The episode as ``EvalReport.per_episode`` holds it: every figure and box, its shift if it had one."""

@@ -62,7 +62,7 @@ def at_level(sweep: dict, level: int) -> list[dict]:
     return [r for r in sweep["rows"] if r["level"] == level]
 
 
-def headline(sweeps: list[dict]) -> str:
+def shifts_headline(sweeps: list[dict]) -> str:
     """One line per policy: control success, mean relative success at level 2 (``mean_relative``), worst shift
     there."""
     lines = ["| policy | variant | control | mean relative success at level 2 | worst shift at level 2 |",
@@ -278,9 +278,9 @@ def target_lines(seeds: list[dict], shifts: list[str], means: dict[str, float], 
     return lines
 
 
-def fill(text: str, sweeps: list[dict]) -> str:
+def fill_shift_tables(text: str, sweeps: list[dict]) -> str:
     """``text`` with its marked regions (the shift list, the headline, the table) rewritten."""
-    parts = {"list": shift_list(), "shades": shade_table(), "headline": headline(sweeps),
+    parts = {"list": shift_list(), "shades": shade_table(), "headline": shifts_headline(sweeps),
              "randomised": randomised_table(sweeps),
              "table": sweep_index(sweeps) + "\n\nMade by:\n\n" + provenance(sweeps)}
     for mark, body in parts.items():

@@ -15,14 +15,15 @@ success (``boxes_to_sort`` placed, none misplaced or dropped).
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
 import numpy as np
 
 from colorsort.cell.boxes import Box, BoxPool, BoxStatus
-from colorsort.config import BIN_COLORS, CellLayout
+from colorsort.config import BIN_COLORS, CellLayout, is_distractor
 
 logger = logging.getLogger("colorsort")
 
@@ -110,13 +111,39 @@ class Verdict:
     reason: str  # "ok", the first wrong outcome of a finished episode, or "timeout" for an unfinished one
 
 
+def episode_rule(done: Any, failed: Any) -> tuple[Any, Any]:
+    """The benchmark's rule for an episode whose counted boxes have all left play (``done``) and of which one was
+    misplaced or dropped (``failed``): (success, terminated), on bools or on arrays of them (a row per world) alike.
+    An episode succeeds when done with none failed, and ends at either (truncation is its env's step limit)."""
+    return np.logical_and(done, np.logical_not(failed)), np.logical_or(done, failed)
+
+
 def judge(events: list[BoxEvent], boxes: int) -> Verdict:
     """The verdict on an episode that ends when ``boxes`` boxes have left play; later events do not count."""
     first = events[:boxes]
     wrong = [e.outcome for e in first if not e.outcome.handled_right]
     done = len(first) >= boxes
     reason = ("timeout" if not done else wrong[0].value if wrong else "ok")
-    return Verdict(done, done and not wrong, bool(wrong), reason)
+    success, _ = episode_rule(done, bool(wrong))
+    return Verdict(done, bool(success), bool(wrong), reason)
+
+
+@dataclass(frozen=True)
+class EpisodeTally:
+    """What an episode's counted boxes came to: its verdict, a count per ``Outcome``, the distractors among them and
+    the times [s] of those handled right (``EpisodeResult`` and the Gymnasium env's ``info`` both read it)."""
+
+    verdict: Verdict
+    counts: dict[Outcome, int]
+    distractors: int
+    sorted_times: list[float]
+
+    @classmethod
+    def of(cls, events: Sequence[BoxEvent], boxes: int) -> EpisodeTally:
+        """The tally of the first ``boxes`` of ``events`` (the boxes that left play, in order)."""
+        counted = list(events[:boxes])
+        return cls(judge(counted, boxes), outcome_counts(counted), sum(is_distractor(e.color) for e in counted),
+                   [e.time for e in counted if e.outcome.handled_right])
 
 
 def outcome_counts(events: list[BoxEvent]) -> dict[Outcome, int]:

@@ -54,7 +54,7 @@ def read(path: Path) -> dict:
 def plot_runs(files: list[Path], labels: list[str], out: Path) -> None:
     """Each run's learning curve (its first seed's checkpoints on its main variant) on one axis, written to ``out``."""
     from colorsort.training.publishing.run_summary import plot_curves
-    from colorsort.training.publishing.tables import machine, main_variant
+    from colorsort.training.publishing.tables import main_variant, trained_on
     from colorsort.training.results_file import PipelineResults
 
     if len(labels) != len(files):
@@ -65,7 +65,7 @@ def plot_runs(files: list[Path], labels: list[str], out: Path) -> None:
     variants = {main_variant(r) for r in runs}
     if len(variants) > 1:
         raise ConfigError(f"the curves are on different variants ({', '.join(sorted(variants))}); give runs of one")
-    machines = sorted({machine(r) for r in runs})
+    machines = sorted({trained_on(r) for r in runs})
     plot_curves([(lab, r.curve) for lab, r in zip(labels, runs, strict=True)], variants.pop(),
                 " / ".join(machines), out)
     each = (f"{lab} ({len(r.curve)} checkpoints)" for lab, r in zip(labels, runs, strict=True))

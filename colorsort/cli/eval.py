@@ -53,12 +53,12 @@ import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from datetime import UTC, datetime
 from pathlib import Path
 
+from colorsort.benchmark.eval_command import EvalCommandConfig
 from colorsort.benchmark.evaluate import Evaluation, observation_settings, run_evaluation
-from colorsort.benchmark.lockstep import PRECISIONS
 from colorsort.benchmark.metrics import format_report, format_table
 from colorsort.benchmark.policies import misfit
 from colorsort.benchmark.report_page import choose_films, write_report
@@ -67,104 +67,11 @@ from colorsort.benchmark.sweep_journal import SweepJournal, header, journal_path
 from colorsort.cli.config_args import Spelling, parse_config
 from colorsort.cli.run import guarded
 from colorsort.errors import ConfigError, Interrupted
-from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
+from colorsort.executors.base import ExecutorConfig
 from colorsort.logs import quiet_robosuite_info
-from colorsort.results import machine
+from colorsort.results import this_machine
 from colorsort.shifts import GROUPS, LEVELS, SHIFTS, parse_shifts
 from colorsort.variants import SHIFT_SEEDS, VARIANTS, get_variant
-
-BACKENDS = ("cpu", "warp")  # the warp backend is imported only when chosen: the default install has no warp
-
-
-@dataclass(frozen=True)
-class ReportConfig:
-    """``--report.*``: the page a browser opens from disk."""
-
-    dir: str | None = None  # write a report page here: DIR/index.html, its videos and DIR/report.json
-    # episodes filmed per variant, failures first (None: every failure and 3 successes; 0: none)
-    videos: int | None = None
-    overwrite: bool = False  # replace an existing report folder
-
-    def __post_init__(self) -> None:
-        if self.videos is not None and self.videos < 0:
-            raise ConfigError(f"--videos {self.videos}: give 0 or more (--report.videos)")
-        if self.videos is not None and self.dir is None:
-            raise ConfigError("--videos: films go into a report; give --report DIR (--report.dir)")
-
-
-@dataclass(frozen=True)
-class SweepConfig:
-    """``--sweep.*``: the control and every shift at every level on the same seeds, one table."""
-
-    run: bool = False  # run the sweep (--sweep) instead of one evaluation
-    shifts: tuple[str, ...] = ()  # the shifts to sweep (default: every shift); --sweep-shifts
-    levels: tuple[int, ...] = (1, 2, 3)  # the levels to sweep; --levels
-    side_episodes: int | None = None  # episodes at levels other than 2 (default: --episodes); --side-episodes
-
-    def __post_init__(self) -> None:
-        if not self.levels or any(v not in LEVELS[1:] for v in self.levels):
-            raise ConfigError(f"--levels {','.join(map(str, self.levels))}: give comma-separated levels from "
-                              f"{list(LEVELS[1:])}")
-
-
-@dataclass(frozen=True)
-class EvalCommandConfig:
-    """``colorsort-eval``'s settings: every field is a flag (``--episodes 50``, ``--report.dir=DIR``)."""
-
-    policy: str = "expert"  # expert, random, or a LeRobot checkpoint folder
-    variant: str = "default"  # a variant name (see --list), or all
-    episodes: int = 10  # episodes to run
-    seed: int | None = None  # first seed (default: the variant's evaluation seeds)
-    image_size: int | None = None  # square camera images [px] (default: a checkpoint's own, else 128)
-    # comma-separated cameras or 'none' (default: those a checkpoint was trained on, else scene,wrist)
-    cameras: str | None = None
-    episode_length: int | None = None  # steps before an episode is truncated (default: the variant's time limit)
-    # where the episodes run and how many at once (--envs N is --executor.workers N; --executor ray is
-    # --executor.name ray): each in its own process or Ray task, the same numbers whatever N
-    executor: ExecutorConfig = field(default_factory=ExecutorConfig)
-    shard_size: int = DEFAULT_SHARD_SIZE  # episodes per job, at most (fewer where that keeps every worker busy)
-    # CPU cells each worker steps together, one batched policy forward a control step (--envs W: W x N cells)
-    batch_size: int = 1
-    # a learned policy's forward: float32, or bfloat16 (CPU autocast, --batch-size above 1; docs/speed.md says where
-    # its scores hold); the printout and --json say which
-    precision: str = "float32"
-    json: str | None = None  # write the metrics as JSON here; each finished episode is kept in <json>.partial.jsonl
-    resume: bool = False  # run only the episodes the journal of --json (<json>.partial.jsonl) lacks
-    backend: str = "cpu"  # cpu: the CPU cell (the reference); warp: the batched cell on MuJoCo Warp (docs/gpu.md)
-    device: str | None = None  # --backend warp: Warp's device, cuda:0 (default) or cpu
-    # held-out shifts NAME:LEVEL, level 0-3, or NAME:train for a shift's training range (all:L: every shift; see
-    # --list-shifts); --shift given twice adds
-    shift: tuple[str, ...] = ()
-    report: ReportConfig = field(default_factory=ReportConfig)
-    sweep: SweepConfig = field(default_factory=SweepConfig)
-    list: bool = False  # print the variants, one per line, and exit
-    list_shifts: bool = False  # print every held-out shift, its levels in units and its training range, and exit
-
-    def __post_init__(self) -> None:
-        if self.episodes < 1:
-            raise ConfigError(f"--episodes {self.episodes}: give at least 1")
-        if self.backend not in BACKENDS:
-            raise ConfigError(f"--backend {self.backend!r}: valid backends are {list(BACKENDS)}")
-        if self.device is not None and self.backend != "warp":
-            raise ConfigError("--device: only --backend warp runs on a chosen device")
-        if self.backend == "warp" and self.executor.name != "local":
-            raise ConfigError("--backend warp runs on one device, not on an --executor")
-        if self.sweep.run and (self.shift or self.report.dir or self.variant == "all" or self.backend != "cpu"):
-            raise ConfigError("--sweep runs its own arms on one variant, on the CPU cell: leave out --shift, --report,"
-                              " --variant all and --backend warp")
-        if self.resume and not self.json:
-            raise ConfigError("--resume continues a run from the journal beside its --json: give --json")
-        if not 1 <= self.batch_size <= 1024:
-            raise ConfigError(f"--batch-size {self.batch_size}: give 1 to 1024 cells a worker")
-        if self.batch_size > 1 and self.backend != "cpu":
-            raise ConfigError("--batch-size steps CPU cells in each worker (--backend cpu); with --backend warp, "
-                              "--envs is the number of worlds stepped together")
-        if self.precision not in PRECISIONS:
-            raise ConfigError(f"--precision {self.precision!r}: valid precisions are {list(PRECISIONS)}")
-        if self.precision != "float32" and (self.batch_size == 1 or self.policy in ("expert", "random")):
-            raise ConfigError(f"--precision {self.precision}: a learned policy's batched forward only; give "
-                              "--batch-size 2 or more and a checkpoint")
-
 
 # flags as they were written before the command was its configuration (docs/commands.md): both forms work
 SPELLING = Spelling(renamed={"--envs": "--executor.workers", "--executor": "--executor.name",
@@ -207,16 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     film = report.dir is not None and report.videos != 0
     journal = None
     if args.backend == "warp":
-        try:
-            from colorsort.batched.evaluate import evaluate_batched
-        except ImportError as error:
-            raise ConfigError(f"--backend warp needs MuJoCo Warp ({error}): pip install -e '.[gpu]'") from error
-
-        batched = [evaluate_batched(args.policy, name, args.episodes, seed=args.seed, envs=executor.workers,
-                                    device=args.device or "cuda:0", episode_length=args.episode_length, film=film,
-                                    videos=report.videos) for name in names]
-        evaluation = Evaluation([b.report for b in batched],
-                                {(b.report.variant, seed): video for b in batched for seed, video in b.films.items()})
+        evaluation = on_warp(args, names, film)
     else:
         journal = open_journal(args, cameras, image_size, "evaluation")
         with interrupted_line(journal):
@@ -246,6 +144,20 @@ def main(argv: list[str] | None = None) -> int:
         page = write_report(report.dir, reports, kept, payload, command)
         print(f"report: {page} ({len(kept)} videos)")
     return 0
+
+
+def on_warp(args: EvalCommandConfig, names: list[str], film: bool) -> Evaluation:
+    """The evaluation of ``names`` on the batched cell (``--backend warp``)."""
+    try:
+        from colorsort.batched.evaluate import evaluate_batched
+    except ImportError as error:
+        raise ConfigError(f"--backend warp needs MuJoCo Warp ({error}): pip install -e '.[gpu]'") from error
+
+    batched = [evaluate_batched(args.policy, name, args.episodes, seed=args.seed, envs=args.executor.workers,
+                                device=args.device or "cuda:0", episode_length=args.episode_length, film=film,
+                                videos=args.report.videos) for name in names]
+    return Evaluation([b.report for b in batched],
+                      {(b.report.variant, seed): video for b in batched for seed, video in b.films.items()})
 
 
 def list_shifts() -> str:
@@ -290,7 +202,7 @@ def sweep(args: EvalCommandConfig, argv: list[str], cameras: tuple[str, ...], im
         payload = {"policy": args.policy, "variant": args.variant, "seeds": list(SHIFT_SEEDS[: args.episodes]),
                    "command": shlex.join(["colorsort-eval", *argv]), "wall_s": round(wall, 1),
                    "executor": executor.name, "envs": executor.workers, "batch_size": args.batch_size,
-                   "precision": args.precision, "machine": machine(),
+                   "precision": args.precision, "machine": this_machine(),
                    "resumed_episodes": reused,  # taken from the journal; wall_s is the others' time
                    "written": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                    "rows": rows, "reports": [asdict(r) for r in reports]}

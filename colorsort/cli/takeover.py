@@ -20,6 +20,7 @@ Exit status: 0 done, 1 no episode kept, 2 bad arguments, 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import sys
 
 from colorsort.cli.run import guarded
 from colorsort.data.config import VCODECS
@@ -40,9 +41,8 @@ def parse_handover(text: str) -> tuple[int, int]:
     return steps[0], steps[-1]
 
 
-@guarded("colorsort-takeover")
-def main(argv: list[str] | None = None) -> int:
-    quiet_robosuite_info()
+def parse_args(argv: list[str]) -> TakeoverConfig:
+    """``argv`` as ``colorsort-takeover``'s configuration; ``--help`` prints every flag and exits."""
     parser = argparse.ArgumentParser(prog="colorsort-takeover", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--policy", required=True, help="a LeRobot checkpoint (pretrained_model folder)")
@@ -61,10 +61,16 @@ def main(argv: list[str] | None = None) -> int:
                         help="the expert keeps the cup at its home yaw over a turned box, as colorsort-collect's "
                              "--no-turn (give it where the demos had it)")
     args = parser.parse_args(argv)
-    config = TakeoverConfig(policy=args.policy, out=args.out, variant=args.variant, episodes=args.episodes,
-                            handover=parse_handover(args.handover), seed=args.seed, repo_id=args.repo_id,
-                            vcodec=args.vcodec, expert=parse_changes(args.expert) if args.expert else (),
-                            turn_to_box=not args.no_turn)
+    return TakeoverConfig(policy=args.policy, out=args.out, variant=args.variant, episodes=args.episodes,
+                          handover=parse_handover(args.handover), seed=args.seed, repo_id=args.repo_id,
+                          vcodec=args.vcodec, expert=parse_changes(args.expert) if args.expert else (),
+                          turn_to_box=not args.no_turn)
+
+
+@guarded("colorsort-takeover")
+def main(argv: list[str] | None = None) -> int:
+    quiet_robosuite_info()
+    config = parse_args(sys.argv[1:] if argv is None else argv)
     summary = record_takeovers(config)
     print(f"kept {len(summary.kept)} of {config.episodes} episodes, {summary.frames} expert-labelled frames "
           f"-> {summary.root}")

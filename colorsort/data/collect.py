@@ -21,7 +21,7 @@ from tqdm import tqdm
 from colorsort.data import store
 from colorsort.data.config import CollectConfig
 from colorsort.data.recorder import TriedEpisode
-from colorsort.data.shards import PRELOAD, ShardJob, merge, merge_in_child, record, shard_name, summary_of
+from colorsort.data.shards import PRELOAD, ShardJob, merge_in_child, merge_shards, record, shard_name, summary_of
 from colorsort.executors.base import Task, TaskResult, chunks, forwarded_env
 from colorsort.executors.factory import make_executor
 
@@ -152,7 +152,7 @@ def merge_and_publish(staging: store.StagingRun) -> None:
     reports = [summary_of(p, m) for p, m in shards]
     if any(s.kept for s in reports):
         sources = ([staging.root] if marker else []) + [Path(s.root) for s in reports if s.kept]
-        merger = merge if config.executor.name == "local" and config.executor.workers == 1 else merge_in_child
+        merger = merge_shards if config.executor.name == "local" and config.executor.workers == 1 else merge_in_child
         merger(sources, staging.merged, config.repo_id)
         kept = (marker["episodes"] if marker else []) + [i for s in reports for i in s.kept]
         layout = next((s.sim_state for s in reports if s.sim_state), None)

@@ -122,73 +122,102 @@ def record_shard(config: CollectConfig, indices: list[int], root: Path,
     Ctrl-C (KeyboardInterrupt) or ``stop()`` turning true abandons the episode under way and
     returns with ``interrupted`` set; any other error is returned in ``error``.
     """
+    out = ShardSummary(str(root))
+    t0 = time.perf_counter()
+    env = make_recording_env(config)
+    expert = make_expert(env, config.expert_config)
+    out.sim_state = env.sim_state_layout.describe()
+    dataset = open_dataset(config, env, root)
+    demonstrator = Demonstrator(config, env, expert)
+    out.seconds["setup"] += time.perf_counter() - t0
+    try:
+        for index in indices:
+            report(demonstrator.record(index, dataset, out, stop))
+    except (KeyboardInterrupt, Stopped):
+        out.interrupted = True
+    except Exception:  # noqa: BLE001 - reported to the caller, finished episodes are still saved
+        out.error = traceback.format_exc()
+    finally:
+        finalize(dataset, out)
+        env.close()
+    return out
+
+
+def open_dataset(config: CollectConfig, env: ColorSort, root: Path) -> Any:
+    """A new LeRobot dataset at ``root`` for ``env``'s frames at ``config``'s cameras, encoding as it records."""
     import av
     from lerobot.configs.video import RGBEncoderConfig
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's notes on every file it writes (lerobot restores
     # FFmpeg's own log callback, which prints at this level)
-    out = ShardSummary(str(root))
-    sec = out.seconds
-    t0 = time.perf_counter()
-    env = make_recording_env(config)
-    expert = make_expert(env, config.expert_config)
-    lighting = None
-    if config.variant:
-        variant = get_variant(config.variant)
-        lighting = next((draw for p in config.perturbations if (draw := p.lighting(variant))), variant.lighting)
-    around_expert = sorted(config.perturbations, key=lambda p: (p.order, p.name))  # innermost first
-    out.sim_state = env.sim_state_layout.describe()
-    dataset = LeRobotDataset.create(
+    return LeRobotDataset.create(
         config.repo_id, config.fps, features(env, config.cameras, config.image_size), root=root,
         robot_type=config.robot, use_videos=True, video_backend="pyav",
         rgb_encoder=RGBEncoderConfig(vcodec=config.vcodec), streaming_encoding=True, encoder_queue_maxsize=10_000,
         encoder_threads=1 if config.executor.workers > 1 or config.executor.name != "local" else None,
     )
-    sec["setup"] += time.perf_counter() - t0
-    limit = episode_time_limit(config)
-    k = config.boxes_per_episode
+
+
+class Demonstrator:
+    """The expert of a collection with its perturbations and lights, recording episodes by number.
+
+    Args:
+        config: the collection.
+        env: the recording env (``make_recording_env``).
+        expert: the expert acting in it.
+    """
+
+    def __init__(self, config: CollectConfig, env: ColorSort, expert: Expert):
+        self.config, self.env, self.expert = config, env, expert
+        self.lighting = None
+        if config.variant:
+            variant = get_variant(config.variant)
+            self.lighting = next((draw for p in config.perturbations if (draw := p.lighting(variant))),
+                                 variant.lighting)
+        self.around_expert = sorted(config.perturbations, key=lambda p: (p.order, p.name))  # innermost first
+
+    def record(self, index: int, dataset: Any, out: ShardSummary, stop: Callable[[], bool]) -> TriedEpisode:
+        """Episode ``index`` (seed ``config.seed + index``), saved in ``dataset`` when it sorted its boxes right (its
+        draws in ``out.draws`` under shifts), cleared otherwise."""
+        config, env, expert = self.config, self.env, self.expert
+        seed, k, sec = config.seed + index, config.boxes_per_episode, out.seconds
+        obs = env.reset(seed=seed, lighting=self.lighting)  # as the benchmark's gym env: same seed, same episode
+        expert.reset(obs)
+        hooks = [p.episode(seed, expert) for p in self.around_expert]
+        first = min(env.boxes_in_play(), key=lambda b: b.serial)
+        writer = FrameWriter(env, dataset, config.cameras, task_text(first.color, k), sec)
+        # stored as float32: the env consumes exactly that; the executed action is the stored one unless a
+        # perturbation holds something back
+        rollout(CellEpisode(env, k, episode_time_limit(config)), obs, partial(perturbed_step, hooks, expert),
+                [writer], stop=stop)
+        reason = judge(env.events, k).reason
+        t = time.perf_counter()
+        with held_interrupts():  # a save cut short would cost every episode of the shard
+            if reason == "ok":
+                dataset.save_episode()
+                out.kept.append(index)
+                if config.shift:
+                    out.draws[str(index)] = env.shifts.record
+            else:
+                dataset.clear_episode_buffer()
+                out.failed[str(index)] = reason
+            out.tried.append(index)
+        sec["episode saving"] += time.perf_counter() - t
+        return TriedEpisode(index, seed, reason == "ok", reason, writer.frames, writer.frames / config.fps)
+
+
+def finalize(dataset: Any, out: ShardSummary) -> None:
+    """Finish ``dataset``'s files with every episode saved; the one under way, if any, is dropped. After an
+    interrupt that cut a save short (``out.incomplete``) the files are not to be trusted and are dropped anyway."""
     try:
-        for index in indices:
-            seed = config.seed + index
-            obs = env.reset(seed=seed, lighting=lighting)  # as the benchmark's gym env: same seed, same episode
-            expert.reset(obs)
-            hooks = [p.episode(seed, expert) for p in around_expert]
-            first = min(env.boxes_in_play(), key=lambda b: b.serial)
-            writer = FrameWriter(env, dataset, config.cameras, task_text(first.color, k), sec)
-            # stored as float32: the env consumes exactly that; the executed action is the stored one unless a
-            # perturbation holds something back
-            rollout(CellEpisode(env, k, limit), obs, partial(perturbed_step, hooks, expert), [writer], stop=stop)
-            frames = writer.frames
-            reason = judge(env.events, k).reason
-            t = time.perf_counter()
-            with held_interrupts():  # a save cut short would cost every episode of the shard
-                if reason == "ok":
-                    dataset.save_episode()
-                    out.kept.append(index)
-                    if config.shift:
-                        out.draws[str(index)] = env.shifts.record
-                else:
-                    dataset.clear_episode_buffer()
-                    out.failed[str(index)] = reason
-                out.tried.append(index)
-            sec["episode saving"] += time.perf_counter() - t
-            report(TriedEpisode(index, seed, reason == "ok", reason, frames, frames / config.fps))
-    except (KeyboardInterrupt, Stopped):
-        out.interrupted = True
-    except Exception:  # noqa: BLE001 - reported to the caller, finished episodes are still saved
-        out.error = traceback.format_exc()
-    finally:
-        try:
-            pending = dataset.has_pending_frames()
-        except KeyError:  # save_episode takes "size" out of the buffer first: the interrupt came while it saved
-            out.incomplete = pending = True
-        if pending:
-            dataset.clear_episode_buffer()  # the episode under way is not saved
-        try:
-            dataset.finalize()
-        except Exception:  # noqa: BLE001 - after a cut-short save the files are dropped anyway
-            if not out.incomplete:
-                raise
-        env.close()
-    return out
+        pending = dataset.has_pending_frames()
+    except KeyError:  # save_episode takes "size" out of the buffer first: the interrupt came while it saved
+        out.incomplete = pending = True
+    if pending:
+        dataset.clear_episode_buffer()  # the episode under way is not saved
+    try:
+        dataset.finalize()
+    except Exception:  # noqa: BLE001 - after a cut-short save the files are dropped anyway
+        if not out.incomplete:
+            raise

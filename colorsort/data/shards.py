@@ -83,7 +83,7 @@ def previous_attempt(worker: Path) -> int:
         return 1
 
 
-def merge(sources: list[Path], dest: Path, repo_id: str) -> None:
+def merge_shards(sources: list[Path], dest: Path, repo_id: str) -> None:
     """One dataset at ``dest`` from ``sources`` (complete datasets), episodes in order, with LeRobot's
     ``aggregate_datasets``."""
     if len(sources) == 1:
@@ -101,10 +101,10 @@ def merge(sources: list[Path], dest: Path, repo_id: str) -> None:
 
 
 def merge_in_child(sources: list[Path], dest: Path, repo_id: str) -> None:
-    """``merge`` in a child process: the caller never has to import lerobot (seconds of torch)."""
+    """``merge_shards`` in a child process: the caller never has to import lerobot (seconds of torch)."""
     ctx = mp.get_context("forkserver")
     ctx.set_forkserver_preload(list(PRELOAD))
-    p = ctx.Process(target=merge, args=(sources, dest, repo_id))
+    p = ctx.Process(target=merge_shards, args=(sources, dest, repo_id))
     p.start()
     p.join()
     if p.exitcode != 0:

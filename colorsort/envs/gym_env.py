@@ -26,8 +26,7 @@ import numpy as np
 from gymnasium import spaces
 
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, check_cameras
-from colorsort.cell.referee import Outcome, judge, outcome_counts
-from colorsort.config import is_distractor
+from colorsort.cell.referee import EpisodeTally, Outcome, episode_rule
 from colorsort.envs.robosuite_task import ColorSort
 from colorsort.envs.schema import ENV_STATE_SIZE, box_state, robot_state, state_size
 from colorsort.errors import ConfigError
@@ -137,7 +136,7 @@ class ColorSortGymEnv(gym.Env):
         self.raw_obs, reward, _, _ = self.env.step(np.asarray(action, dtype=np.float32))
         self.steps += 1
         info = self._info()
-        terminated = info["is_success"] or info["failed"]
+        _, terminated = episode_rule(info["boxes_done"] >= self.variant.boxes, info["failed"])
         truncated = not terminated and self.steps >= self._max_episode_steps
         return self._observation(), float(reward), bool(terminated), bool(truncated), info
 
@@ -163,19 +162,18 @@ class ColorSortGymEnv(gym.Env):
         return obs
 
     def _info(self) -> dict[str, Any]:
-        events = self.env.events[: self.variant.boxes]
-        verdict = judge(events, self.variant.boxes)
-        count = outcome_counts(events)
+        tally = EpisodeTally.of(self.env.events, self.variant.boxes)
+        count = tally.counts
         return {
-            "is_success": verdict.success,
-            "failed": verdict.failed,
+            "is_success": tally.verdict.success,
+            "failed": tally.verdict.failed,
             "correct": count[Outcome.PLACED],
             "misplaced": count[Outcome.MISPLACED],
             "dropped": count[Outcome.DROPPED],
             "let_through": count[Outcome.REJECTED],
-            "distractors": sum(is_distractor(e.color) for e in events),
-            "boxes_done": len(events),
-            "sorted_times": [e.time for e in events if e.outcome.handled_right],  # [s] boxes handled right
+            "distractors": tally.distractors,
+            "boxes_done": sum(count.values()),
+            "sorted_times": tally.sorted_times,  # [s] boxes handled right
             "sim_time": self.env.cur_time,
         }
 

@@ -29,6 +29,7 @@ from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
+from colorsort.config import BACKENDS
 from colorsort.envs.schema import ENV_STATE_SIZE, state_size
 from colorsort.errors import ConfigError
 from colorsort.robots import ROBOTS
@@ -36,7 +37,6 @@ from colorsort.shifts import parse_shifts
 from colorsort.variants import Variant, get_variant, gym_ids
 
 NAMESPACE = "colorsort"
-BACKENDS = ("cpu", "warp")
 
 
 class Checked(str):

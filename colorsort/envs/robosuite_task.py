@@ -16,7 +16,6 @@ from typing import Any
 
 import mujoco
 import numpy as np
-from robosuite import macros
 from robosuite.controllers import load_composite_controller_config
 from robosuite.environments.manipulation.manipulation_env import ManipulationEnv
 from robosuite.models.tasks import ManipulationTask
@@ -32,10 +31,10 @@ from colorsort.cell.rendering import check_gl
 from colorsort.cell.sim_state import CellState, SimStateLayout, rng_from_words, rng_to_words
 from colorsort.cell.suction import add_welds
 from colorsort.config import CellLayout, Lighting, TaskConfig, layout_for, make_config
-from colorsort.envs.servo import Servo
+from colorsort.envs.servo import Servo, servo_period
 from colorsort.errors import ConfigError, checked_action
 from colorsort.paths import asset_path
-from colorsort.robots import GRIPPERS, ROBOTS, RobotSpec
+from colorsort.robots import ROBOTS, RobotSpec, checked_robot
 from colorsort.shifts.episode import CellShifts
 
 
@@ -80,13 +79,7 @@ class ColorSort(ManipulationEnv):
         renderer_config: dict | None = None, seed: int | None = None, reward_scale: float | None = 1.0,
         reward_shaping: bool = False, shift: str | Iterable[str] | None = None, **overrides: Any,
     ):
-        robot_list = [robots] if isinstance(robots, str) else list(robots)
-        if len(robot_list) != 1 or robot_list[0] not in ROBOTS:
-            raise ConfigError(f"ColorSort takes one robot; got {robots!r}. Valid robots: {list(ROBOTS)}")
-        if gripper_types not in GRIPPERS:
-            raise ConfigError(f"Unknown gripper {gripper_types!r}. Valid grippers: {list(GRIPPERS)}")
-        if gripper_types == "default" and robot_list[0] != "IRB140":
-            raise ConfigError(f"{robot_list[0]}'s default gripper cannot pick 0.1 m boxes; use 'SuctionGripper'")
+        robot_list = [checked_robot(robots, gripper_types)]
         self.config = config if config is not None else make_config(preset, **overrides)
         if config is not None and overrides:
             raise ConfigError("Pass either config or field overrides, not both")
@@ -103,11 +96,7 @@ class ColorSort(ManipulationEnv):
         if horizon is None:
             horizon = int(np.ceil(self.config.time_limit * control_freq))
 
-        physics_hz = 1.0 / macros.SIMULATION_TIMESTEP
-        if servo_freq <= 0 or abs(physics_hz / servo_freq - round(physics_hz / servo_freq)) > 1e-9:
-            raise ConfigError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, "
-                             "e.g. 100, 250, 500")
-        self._servo_period = int(round(physics_hz / servo_freq))  # physics steps per torque update
+        self._servo_period = servo_period(servo_freq)  # physics steps per torque update
         self._substep = 0
         self._obs_dt = 0.0
         self._cameras = cameras.CameraRenderer()

@@ -18,6 +18,9 @@ from typing import Any
 
 import mujoco
 import numpy as np
+from robosuite import macros
+
+from colorsort.errors import ConfigError
 
 
 class Servo:
@@ -79,3 +82,12 @@ class Servo:
         desired_torque = np.multiply(np.array(position_error), np.array(c.kp)) + np.multiply(-joint_vel, c.kd)
         torques = np.dot(mass_matrix, desired_torque) + data.qfrc_bias[c.qvel_index]
         data.ctrl[self.actuators] = np.clip(torques, self.low, self.high)
+
+
+def servo_period(servo_freq: float) -> int:
+    """Physics steps per servo update at ``servo_freq`` [Hz], which must divide robosuite's physics rate."""
+    physics_hz = 1.0 / macros.SIMULATION_TIMESTEP
+    if servo_freq <= 0 or abs(physics_hz / servo_freq - round(physics_hz / servo_freq)) > 1e-9:
+        raise ConfigError(f"servo_freq={servo_freq} must divide the {physics_hz:.0f} Hz physics rate, "
+                          "e.g. 100, 250, 500")
+    return int(round(physics_hz / servo_freq))

@@ -89,60 +89,81 @@ class RayExecutor:
             # "local": a new cluster here, never one that an earlier `ray start` on this machine left behind
             ray.init(address=self.config.address or "local", runtime_env={"env_vars": self.env},
                      include_dashboard=False, logging_level=logging.WARNING)
-        queue, run = message_queue(), uuid.uuid4().hex
+        batch = _Batch(tasks, message_queue(), on_message, on_done)
         remote = ray.remote(_entry).options(num_cpus=1, max_retries=self.config.retries, retry_exceptions=False)
-        results = [TaskResult(t.key) for t in tasks]
-        index = {t.key: i for i, t in enumerate(tasks)}
-        pending: deque[int] = deque(range(len(tasks)))
-        running: dict = {}
-
-        def drain() -> None:
-            for sender, kind, key, payload in queue.get_nowait_batch(queue.qsize()):
-                if sender != run:  # a task of an earlier run, stopped since
-                    continue
-                if kind == "start":
-                    results[index[key]].attempts += 1
-                else:
-                    on_message(payload)
-
-        def finish(ref) -> None:
-            i = running.pop(ref)
-            try:
-                results[i].value = ray.get(ref)
-            except ray.exceptions.TaskCancelledError:
-                results[i].stopped = True
-            except ray.exceptions.RayError as err:
-                results[i].error = f"{tasks[i].key}: {err}"
-            on_done(results[i])
-
         try:
-            while pending or running:
-                while pending and len(running) < self.config.workers:
-                    i = pending.popleft()
-                    running[remote.remote(tasks[i], queue, run)] = i
-                done, _ = ray.wait(list(running), num_returns=len(running), timeout=0.5)
-                drain()
+            while batch.pending or batch.running:
+                while batch.pending and len(batch.running) < self.config.workers:
+                    i = batch.pending.popleft()
+                    batch.running[remote.remote(tasks[i], batch.queue, batch.run)] = i
+                done, _ = ray.wait(list(batch.running), num_returns=len(batch.running), timeout=0.5)
+                batch.drain()
                 for ref in done:
-                    finish(ref)
+                    batch.finish(ref)
         except KeyboardInterrupt:
-            for i in pending:
-                results[i].stopped = True
-            for ref in running:
-                ray.cancel(ref)
-            deadline = time.monotonic() + self.cancel_wait_s  # a cancelled task finalizes what it recorded
-            while running and time.monotonic() < deadline:
-                done, _ = ray.wait(list(running), num_returns=len(running), timeout=1.0)
-                for ref in done:
-                    finish(ref)
-            for ref, i in list(running.items()):  # never reached by its cancel: stopped, whatever it was doing
-                ray.cancel(ref, force=True)
-                running.pop(ref)
-                results[i].stopped = True
-                results[i].error = f"{tasks[i].key}: still running {self.cancel_wait_s:g} s after its cancel; killed"
-                on_done(results[i])
+            batch.stop(self.cancel_wait_s)
         finally:
-            drain()
+            batch.drain()
             if started_here:
-                queue.shutdown()
+                batch.queue.shutdown()
                 ray.shutdown()
-        return results
+        return batch.results
+
+
+class _Batch:
+    """The tasks of one ``RayExecutor.run``: those waiting, those running (by their object refs), their results, and the
+    queue their messages come back on (tagged with this run's id: a task of an earlier run, stopped since, is not
+    this run's)."""
+
+    def __init__(self, tasks: list[Task], queue: Any, on_message: Callable[[Any], None],
+                 on_done: Callable[[TaskResult], None]):
+        self.tasks, self.queue, self.on_message, self.on_done = tasks, queue, on_message, on_done
+        self.run = uuid.uuid4().hex
+        self.results = [TaskResult(t.key) for t in tasks]
+        self.index = {t.key: i for i, t in enumerate(tasks)}
+        self.pending: deque[int] = deque(range(len(tasks)))
+        self.running: dict = {}
+
+    def drain(self) -> None:
+        """Hand on the messages that came back: starts count attempts, the rest go to ``on_message``."""
+        for sender, kind, key, payload in self.queue.get_nowait_batch(self.queue.qsize()):
+            if sender != self.run:
+                continue
+            if kind == "start":
+                self.results[self.index[key]].attempts += 1
+            else:
+                self.on_message(payload)
+
+    def finish(self, ref: Any) -> None:
+        """A task's object ``ref`` is ready: its value, or why it has none."""
+        import ray
+
+        i = self.running.pop(ref)
+        try:
+            self.results[i].value = ray.get(ref)
+        except ray.exceptions.TaskCancelledError:
+            self.results[i].stopped = True
+        except ray.exceptions.RayError as err:
+            self.results[i].error = f"{self.tasks[i].key}: {err}"
+        self.on_done(self.results[i])
+
+    def stop(self, wait_s: float) -> None:
+        """Ctrl-C: nothing more starts; each running task is cancelled and given ``wait_s`` [s] to return what it
+        finished, then killed and reported stopped."""
+        import ray
+
+        for i in self.pending:
+            self.results[i].stopped = True
+        for ref in self.running:
+            ray.cancel(ref)
+        deadline = time.monotonic() + wait_s  # a cancelled task finalizes what it recorded
+        while self.running and time.monotonic() < deadline:
+            done, _ = ray.wait(list(self.running), num_returns=len(self.running), timeout=1.0)
+            for ref in done:
+                self.finish(ref)
+        for ref, i in list(self.running.items()):  # never reached by its cancel: stopped, whatever it was doing
+            ray.cancel(ref, force=True)
+            self.running.pop(ref)
+            self.results[i].stopped = True
+            self.results[i].error = f"{self.tasks[i].key}: still running {wait_s:g} s after its cancel; killed"
+            self.on_done(self.results[i])

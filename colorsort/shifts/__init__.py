@@ -12,10 +12,10 @@ import importlib
 import pkgutil
 
 from colorsort.shifts.base import GROUPS, LEVELS, Shift
-from colorsort.shifts.registry import ALL, SHIFTS, ShiftLevel, parse_shifts, register, shift_label
+from colorsort.shifts.registry import ALL, SHIFTS, ShiftLevel, parse_shifts, register_shift, shift_label
 
 for _module in pkgutil.iter_modules(__path__):
     if _module.name not in ("base", "registry", "episode", "colour"):
         importlib.import_module(f"{__name__}.{_module.name}")
 
-__all__ = ["ALL", "GROUPS", "LEVELS", "SHIFTS", "Shift", "ShiftLevel", "parse_shifts", "register", "shift_label"]
+__all__ = ["ALL", "GROUPS", "LEVELS", "SHIFTS", "Shift", "ShiftLevel", "parse_shifts", "register_shift", "shift_label"]

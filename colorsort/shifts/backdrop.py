@@ -10,14 +10,14 @@ from typing import Any
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 from colorsort.shifts.surfaces import drawn_colour, dress
 
 FLOOR_AS_BUILT = (0.525, 0.525, 0.525)  # the mean of the floor's checker
 FRAME_AS_BUILT = (0.62, 0.64, 0.68)  # frame_mat
 
 
-@register
+@register_shift
 class Backdrop(Shift):
     name = "backdrop"
     group = "appearance"

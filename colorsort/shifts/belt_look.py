@@ -7,13 +7,13 @@ from typing import Any
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 from colorsort.shifts.surfaces import drawn_colour, dress
 
 BELT_AS_BUILT = (0.12, 0.12, 0.13)  # the arena's belt_mat
 
 
-@register
+@register_shift
 class BeltLook(Shift):
     name = "belt-look"
     group = "appearance"

@@ -7,10 +7,10 @@ from typing import Any
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 
-@register
+@register_shift
 class BoxMass(Shift):
     name = "box-mass"
     group = "objects"

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 CLEARANCE = 0.003  # [m] kept between a box's corner and the rail's inner face
 
@@ -29,7 +29,7 @@ def max_yaw(offset: float, half_room: float, half_edge: float) -> float:
     return float(np.pi / 4 - np.arccos(room / np.sqrt(2)))
 
 
-@register
+@register_shift
 class BoxOffset(Shift):
     name = "box-offset"
     group = "layout"

@@ -10,7 +10,7 @@ import numpy as np
 from colorsort.config import BIN_COLORS, COLORS
 from colorsort.shifts.base import Episode, Shift
 from colorsort.shifts.colour import toward
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 # Per class, the two colours it is shaded toward (one drawn per episode): neighbours within the class's name.
 TOWARD: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
@@ -26,7 +26,7 @@ def shade(color: str, distance: float, which: int) -> tuple[float, float, float,
     return (r, g, b, 1.0)
 
 
-@register
+@register_shift
 class BoxShade(Shift):
     name = "box-shade"
     group = "appearance"

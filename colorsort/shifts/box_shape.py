@@ -8,10 +8,10 @@ import numpy as np
 
 from colorsort.config import BoxStyle
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 
-@register
+@register_shift
 class BoxShape(Shift):
     name = "box-shape"
     group = "objects"

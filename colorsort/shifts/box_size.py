@@ -11,10 +11,10 @@ import numpy as np
 
 from colorsort.config import BoxStyle
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 
-@register
+@register_shift
 class BoxSize(Shift):
     name = "box-size"
     group = "objects"

@@ -8,13 +8,13 @@ import mujoco
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift, rounded, unit_vector
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 # The snapshot is the sensor camera's photo: it moves with it.
 MOVED_TOGETHER = {"snapshot": "sensor"}
 
 
-@register
+@register_shift
 class CameraPose(Shift):
     name = "camera-pose"
     group = "viewpoint"

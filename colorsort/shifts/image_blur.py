@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 
 def motion_kernel(length: int, angle_deg: float) -> np.ndarray:
@@ -23,7 +23,7 @@ def motion_kernel(length: int, angle_deg: float) -> np.ndarray:
     return kernel / kernel.sum()
 
 
-@register
+@register_shift
 class ImageBlur(Shift):
     name = "image-blur"
     group = "appearance"

@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift, rounded
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 
 def tint(strength: float, hue: str) -> np.ndarray:
@@ -18,7 +18,7 @@ def tint(strength: float, hue: str) -> np.ndarray:
     return np.array([1 - s, 1.0, 1 - s]) if hue == "green" else np.array([1.0, 1 - s, 1.0])
 
 
-@register
+@register_shift
 class LightColor(Shift):
     name = "light-color"
     group = "appearance"

@@ -10,12 +10,12 @@ import numpy as np
 
 from colorsort.config import NOVEL_COLORS, BoxStyle
 from colorsort.shifts.base import Episode, Shift
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 SHAPES: dict[str, BoxStyle | None] = {"cube": None, "puck": BoxStyle("cylinder", 0.10, 0.07)}
 
 
-@register
+@register_shift
 class NovelDistractors(Shift):
     name = "novel-distractors"
     group = "objects"

@@ -13,7 +13,7 @@ SHIFTS: dict[str, Shift] = {}
 ALL = "all"  # ``all:L``: every shift at level L at once
 
 
-def register[T: type[Shift]](cls: T) -> T:
+def register_shift[T: type[Shift]](cls: T) -> T:
     """Class decorator: make ``cls`` known by its ``name``."""
     if cls.name in SHIFTS:
         raise ConfigError(f"shift {cls.name!r} is registered twice")

@@ -7,10 +7,10 @@ from typing import Any
 import numpy as np
 
 from colorsort.shifts.base import Episode, Shift, rounded, unit_vector
-from colorsort.shifts.registry import register
+from colorsort.shifts.registry import register_shift
 
 
-@register
+@register_shift
 class RobotStart(Shift):
     name = "robot-start"
     group = "viewpoint"

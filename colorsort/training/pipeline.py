@@ -1,6 +1,6 @@
 """A learned baseline end to end: demos -> ``lerobot-train`` -> ``colorsort-eval`` -> table, plots, shipped policy.
 
-For each demo count of the recipe: collect (``stages.collect``); for each training seed, train
+For each demo count of the recipe: collect (``stages.collect_demos``); for each training seed, train
 (``stages.train``) and score the largest set's policies on every evaluation variant and the smaller
 sets' on the main variant; then the learning curve (each earlier checkpoint of the largest set's
 first seed on the main variant's first ``curve_episodes`` seeds; the scored checkpoint's point is the
@@ -14,14 +14,16 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from colorsort.benchmark.metrics import EvalReport
 from colorsort.errors import ConfigError
 from colorsort.training import pipeline_stages as stages
 from colorsort.training import selection
 from colorsort.training.publishing.run_summary import first_episodes, plot_curve, plot_demos, summary_table, table
-from colorsort.training.publishing.ship import add_seeds, machine, ship
+from colorsort.training.publishing.ship import add_seeds, ship, training_machine
 from colorsort.training.recipes import Recipe
 from colorsort.training.results_file import CurvePoint, PipelineResults, ScoreRow, ValidationPoint, report_from_json
 
@@ -66,10 +68,10 @@ def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Pat
     curve: list[CurvePoint] = []
     shipped: Path | None = None
     models: dict[int, Path] = {}  # the largest set's policy of each training seed
-    demos, training, evaluation = recipe.demos, recipe.training, recipe.evaluation
+    demos, training = recipe.demos, recipe.training
     for n in demos.counts:
         largest = n == demos.counts[-1]
-        data = stages.collect(recipe, n, out, settings.workers)
+        data = stages.collect_demos(recipe, n, out, settings.workers)
         if settings.until == "data":
             continue
         kept, frames = stages.size(data)
@@ -83,15 +85,11 @@ def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Pat
             if settings.until == "train":
                 continue
             model, chosen, validation = choose(recipe, settings, run_dir, timing, steps)
-            at = "" if chosen == steps else f"-at{chosen}"
+            passes = round(steps * training.batch_size / trained_frames, 1)
             scored = []
-            for variant in evaluation.variants if largest else (evaluation.main_variant,):
-                stem = out / "eval" / f"{run_dir.name}{at}-{recipe.policy.execution}-{variant}"
-                report = stages.evaluate(recipe, model, variant, evaluation.episodes_on(variant), stem, settings.envs,
-                                         out / "logs")
-                scored.append(ScoreRow(n, kept, trained_frames, seed, steps,
-                                       round(steps * training.batch_size / trained_frames, 1),
-                                       timing["wall_s"] / 60, report_from_json(report),
+            for report in score(recipe, settings, model, run_dir.name + ("" if chosen == steps else f"-at{chosen}"),
+                                largest):
+                scored.append(ScoreRow(n, kept, trained_frames, seed, steps, passes, timing["wall_s"] / 60, report,
                                        chosen if validation else None, tuple(validation)))
                 print(table(scored[-1:], recipe.label).splitlines()[-1], flush=True)
             rows += scored
@@ -105,22 +103,40 @@ def run_pipeline(recipe: Recipe, settings: RunConfig, command: str, ship_to: Pat
         print(f"stopped after the {settings.until!r} stage: {out}")
         return None
     assert shipped is not None
-    plots = [out / "success_vs_demos.png"]
-    main = evaluation.main_variant
-    plot_demos([r for r in rows if r.variant == main], recipe.label, main, plots[0])
-    if curve:
-        plots.append(out / "learning_curve.png")
-        plot_curve(curve, recipe.label, main, machine(training.device), plots[1])
-    wall = time.perf_counter() - t0
-    results = PipelineResults(recipe.to_json(), command, started, round(wall, 1), tuple(rows), tuple(curve))
-    (out / "results.json").write_text(json.dumps(results.to_json(), indent=1))
-    print(f"\n{summary_table(rows, recipe.label)}\n\nplots: {', '.join(map(str, plots))}\n"
-          f"results: {out / 'results.json'}\nwall time: {wall / 60:.1f} min (stages reused from earlier runs excluded)")
+    results = PipelineResults(recipe.to_json(), command, started, round(time.perf_counter() - t0, 1), tuple(rows),
+                              tuple(curve))
+    plots = write_results(recipe, results, out)
     if ship_to is not None:
         ship(recipe, shipped, results, plots, ship_to, command)
     if add_to is not None:
         add_seeds(recipe, results, add_to, command, models, replace_seeds)
     return results
+
+
+def score(recipe: Recipe, settings: RunConfig, model: Path, name: str, largest: bool) -> Iterator[EvalReport]:
+    """``model`` (the checkpoint ``name`` of a run) on the evaluation seeds of every variant of the recipe's
+    evaluation (the largest set) or its main variant alone; one report per variant, as each is made."""
+    evaluation, out = recipe.evaluation, settings.out
+    for variant in evaluation.variants if largest else (evaluation.main_variant,):
+        stem = out / "eval" / f"{name}-{recipe.policy.execution}-{variant}"
+        yield report_from_json(stages.score_policy(recipe, model, variant, evaluation.episodes_on(variant), stem,
+                                               settings.envs, out / "logs"))
+
+
+def write_results(recipe: Recipe, results: PipelineResults, out: Path) -> list[Path]:
+    """``results.json`` and the plots (success against demos; the learning curve, where there is one) under ``out``,
+    and the summary table printed; the plots' paths."""
+    main = recipe.evaluation.main_variant
+    plots = [out / "success_vs_demos.png"]
+    plot_demos([r for r in results.rows if r.variant == main], recipe.label, main, plots[0])
+    if results.curve:
+        plots.append(out / "learning_curve.png")
+        plot_curve(list(results.curve), recipe.label, main, training_machine(recipe.training.device), plots[1])
+    (out / "results.json").write_text(json.dumps(results.to_json(), indent=1))
+    print(f"\n{summary_table(list(results.rows), recipe.label)}\n\nplots: {', '.join(map(str, plots))}\n"
+          f"results: {out / 'results.json'}\nwall time: {results.wall_s / 60:.1f} min (stages reused from earlier "
+          "runs excluded)")
+    return plots
 
 
 def dagger(recipe: Recipe, settings: RunConfig, n: int, data: Path, run_dir: Path, timing: dict, steps: int,
@@ -182,7 +198,7 @@ def learning_curve(recipe: Recipe, settings: RunConfig, run_dir: Path, timing: d
             report = final
         else:
             stem = settings.out / "curve" / f"{run_dir.name}-{recipe.policy.execution}-{step}"
-            report = report_from_json(stages.evaluate(recipe, model, main, episodes, stem, settings.envs,
+            report = report_from_json(stages.score_policy(recipe, model, main, episodes, stem, settings.envs,
                                                       settings.out / "logs"))
         points.append(first_episodes(report, episodes, step, round(minutes, 1)))
     return points

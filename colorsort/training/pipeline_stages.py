@@ -32,8 +32,11 @@ import shutil
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+from colorsort.benchmark.eval_command import EvalCommandConfig
 from colorsort.data.config import CollectConfig
 from colorsort.errors import DataConflictError, StageError
 from colorsort.executors.base import ExecutorConfig
@@ -45,12 +48,14 @@ from colorsort.training.weights import average, derived_copy, saved_every, store
 from colorsort.variants import get_variant
 from colorsort.versions import code_versions
 
+if TYPE_CHECKING:  # imported where it runs: it loads the policies and the Gymnasium env
+    from colorsort.training.takeover import TakeoverConfig
+
 REPO_ID = "local/colorsort-baseline"
 BIN = Path(sys.executable).parent  # the console scripts of this interpreter's environment
 SEED_STRIDE = 1_000_000  # training variant k's demos use seeds k * SEED_STRIDE + i: no two overlap
-# No hub downloads in any stage; torch's threads fixed (2, or what the environment sets): float sums run in another
-# order on another count, so a training's weights depend on it, and with it fixed the same command gives the same
-# weights bit for bit (tests/test_pipeline.py).
+# No hub downloads; torch's threads fixed (2 unless set): a training's weights depend on the count (the order of float
+# sums), so with it fixed the same command gives the same weights bit for bit (tests/test_pipeline.py)
 RUN_ENV = {"HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": os.environ.get("OMP_NUM_THREADS", "2")}
 
 
@@ -67,7 +72,7 @@ def run(cmd: list[str], log: Path, append: bool = False) -> float:
     return time.perf_counter() - t
 
 
-def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
+def collect_demos(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
     """The training set of ``n`` demos: one ``colorsort-collect`` per training variant, merged (reused if there).
 
     Demo i of training variant k has seed ``k * SEED_STRIDE + i``, so a smaller set's parts are the
@@ -97,7 +102,7 @@ def collect(recipe: Recipe, n: int, out: Path, workers: int) -> Path:
             cache.remember(part, part_settings(configs[variant]))
         else:
             print(f"reusing {part}")
-    merge(list(parts.values()), root, drop_box_state=bool(demos.cameras))
+    merge_parts(list(parts.values()), root, drop_box_state=bool(demos.cameras))
     cache.remember(root, merged)
     return root
 
@@ -138,7 +143,7 @@ def part_settings(config: CollectConfig) -> dict:
             "code": code_versions("expert", "cell", "recorder", *(("shifts",) if config.shift else ()))}
 
 
-def merge(parts: list[Path], root: Path, drop_box_state: bool) -> None:
+def merge_parts(parts: list[Path], root: Path, drop_box_state: bool) -> None:
     """LeRobot's ``aggregate_datasets`` of ``parts`` into ``root``, then ``remove_feature`` of the box state."""
     from lerobot.datasets.aggregate import aggregate_datasets
     from lerobot.datasets.dataset_tools import remove_feature
@@ -165,28 +170,30 @@ def label(recipe: Recipe, model: Path, variant: str, k: int, round_: int, out: P
     """``colorsort-takeover`` of DAgger round ``round_`` on training variant ``variant`` (the k-th): ``model`` (a
     checkpoint's ``pretrained_model``) drives, the expert labels (reused if there). Round r's episodes of variant k
     have seeds from ``TAKEOVER_SEED + k * SEED_STRIDE + (r - 1) * episodes``: no round or variant repeats one."""
-    from colorsort.training.takeover import TAKEOVER_SEED
-
-    dagger = recipe.dagger
-    seed = TAKEOVER_SEED + k * SEED_STRIDE + (round_ - 1) * dagger.episodes
-    args = ["--variant", variant, "--episodes", str(dagger.episodes), "--handover", "{},{}".format(*dagger.handover),
-            "--seed", str(seed), "--repo-id", REPO_ID, "--vcodec", CollectConfig.vcodec]  # the demos' codec
-    # the expert that made the demos labels (the keys of the preset's labels stay as they were)
-    if recipe.demos.expert:
-        args.append(f"--expert={changes_text(recipe.demos.expert)}")
-    if not recipe.demos.turn_to_box:
-        args.append("--no-turn")
-    settings = {"colorsort-takeover": ["--policy", checkpoint_name(model), *args],
+    config = label_config(recipe, model, variant, k, round_)
+    settings = {"colorsort-takeover": {"policy": checkpoint_name(model), **config.settings()},
                 "code": code_versions("expert", "cell", "recorder")}
     root = out / "data" / cache.name(f"labels-{variant}-r{round_}", settings)
     if (root / cache.SETTINGS_FILE).is_file():
         print(f"reusing {root}")
         return root
     shutil.rmtree(root, ignore_errors=True)
-    run([str(BIN / "colorsort-takeover"), "--policy", str(model), *args, "--out", str(root)],
+    run([str(BIN / "colorsort-takeover"), *replace(config, out=str(root)).argv()],
         out / "logs" / f"takeover-{root.name}.log")
     cache.remember(root, settings)
     return root
+
+
+def label_config(recipe: Recipe, model: Path, variant: str, k: int, round_: int) -> TakeoverConfig:
+    """The ``colorsort-takeover`` of ``label`` (its ``out`` left empty): the expert that made the demos labels, in the
+    demos' codec."""
+    from colorsort.training.takeover import TAKEOVER_SEED, TakeoverConfig
+
+    dagger = recipe.dagger
+    seed = TAKEOVER_SEED + k * SEED_STRIDE + (round_ - 1) * dagger.episodes
+    return TakeoverConfig(policy=str(model), out="", variant=variant, episodes=dagger.episodes,
+                          handover=dagger.handover, seed=seed, repo_id=REPO_ID, vcodec=CollectConfig.vcodec,
+                          expert=recipe.demos.expert, turn_to_box=recipe.demos.turn_to_box)
 
 
 def add_labels(recipe: Recipe, data: Path, labels: list[Path], stem: str, out: Path) -> Path:
@@ -205,7 +212,7 @@ def add_labels(recipe: Recipe, data: Path, labels: list[Path], stem: str, out: P
         shutil.rmtree(copy, ignore_errors=True)
         remove_feature(LeRobotDataset(REPO_ID, root=part), "observation.environment_state", output_dir=copy,
                        repo_id=REPO_ID)
-    merge([data, *(stripped or labels)], root, drop_box_state=False)
+    merge_parts([data, *(stripped or labels)], root, drop_box_state=False)
     for copy in stripped:
         shutil.rmtree(copy)
     cache.remember(root, merged)
@@ -368,24 +375,26 @@ def checkpoints(run_dir: Path, timing: dict) -> list[tuple[int, float, Path]]:
     return found
 
 
-def evaluate(recipe: Recipe, model: Path, variant: str, episodes: int, stem: Path, envs: int, log_dir: Path,
+def score_policy(recipe: Recipe, model: Path, variant: str, episodes: int, stem: Path, envs: int, log_dir: Path,
              first_seed: int | None = None, shift: str = "") -> dict:
     """``colorsort-eval`` of ``model`` on ``variant``'s first ``episodes`` evaluation seeds into
     ``<stem>-<key>.json`` (reused if there); with ``first_seed``, on the seeds from it instead (validation seeds);
-    with ``shift`` (training ranges, ``--shift``), under it."""
-    settings = [variant, "--episodes", str(episodes)]
-    if first_seed is not None:
-        settings += ["--seed", str(first_seed)]
-    if recipe.evaluation.episode_length:
-        settings += ["--episode-length", str(recipe.evaluation.episode_length)]
-    if shift:
-        settings += ["--shift", shift]
+    with ``shift`` (training ranges, ``--shift``), under it. The key is the evaluation's typed settings
+    (``EvalCommandConfig.settings``) and the versions of the code that makes its episodes."""
+    config = eval_config(recipe, model, variant, episodes, envs, first_seed, shift)
     code = code_versions("cell", *(("shifts",) if shift else ()))
-    path = stem.with_name(cache.name(stem.name, {"colorsort-eval --variant": settings, "code": code}) + ".json")
+    path = stem.with_name(cache.name(stem.name, {"colorsort-eval": config.settings(), "code": code}) + ".json")
     if path.is_file():
         print(f"reusing {path}")
         return json.loads(path.read_text())
-    run([str(BIN / "colorsort-eval"), "--policy", str(model), "--variant", *settings, "--envs", str(envs),
-         "--json", str(path), "--resume"],  # an evaluation a Ctrl-C cut continues from its journal
-        log_dir / f"{stem.parent.name}-{path.stem}.log")
+    config = replace(config, json=str(path), resume=True)  # an evaluation a Ctrl-C cut continues from its journal
+    run([str(BIN / "colorsort-eval"), *config.argv()], log_dir / f"{stem.parent.name}-{path.stem}.log")
     return json.loads(path.read_text())
+
+
+def eval_config(recipe: Recipe, model: Path, variant: str, episodes: int, envs: int, first_seed: int | None = None,
+                shift: str = "") -> EvalCommandConfig:
+    """The ``colorsort-eval`` that scores ``model`` on ``variant`` for a recipe (``score_policy``'s arguments)."""
+    return EvalCommandConfig(policy=str(model), variant=variant, episodes=episodes, seed=first_seed,
+                             episode_length=recipe.evaluation.episode_length,
+                             executor=ExecutorConfig(workers=envs), shift=tuple(s for s in shift.split(",") if s))

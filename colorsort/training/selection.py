@@ -40,7 +40,7 @@ def validate(recipe: Recipe, run: str, checkpoints: list[tuple[int, float, Path]
             for shift in shifts:
                 name = f"{run}-{recipe.policy.execution}-{step}-{variant}" + ("-shifted" if shift else "")
                 shifted = {"shift": shift} if shift else {}
-                report = stages.evaluate(recipe, model, variant, recipe.evaluation.select_episodes,
+                report = stages.score_policy(recipe, model, variant, recipe.evaluation.select_episodes,
                                          out / "select" / name, envs, out / "logs", first_seed=VALIDATION_SEEDS[0],
                                          **shifted)
                 for key in COUNTS:

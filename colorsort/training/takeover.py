@@ -27,7 +27,7 @@ from colorsort.envs.gym_env import ColorSortGymEnv
 from colorsort.envs.rollout import GymEpisode, Observer, Step, rollout
 from colorsort.envs.schema import features, frame
 from colorsort.errors import ConfigError
-from colorsort.expert.config import ExpertConfig, recording_expert
+from colorsort.expert.config import ExpertConfig, changes_text, recording_expert
 from colorsort.expert.factory import make_expert
 from colorsort.variants import get_variant
 
@@ -79,6 +79,20 @@ class TakeoverConfig:
             raise ConfigError(f"handover={self.handover}: give (first, last) steps with 0 <= first <= last")
         if self.seed < 0:
             raise ConfigError(f"seed={self.seed}: give 0 or more")
+
+    def settings(self) -> dict[str, Any]:
+        """What the labels depend on beside the policy: the key of the pipeline's cache of them (not ``out``)."""
+        return {"variant": self.variant, "episodes": self.episodes, "handover": list(self.handover), "seed": self.seed,
+                "repo_id": self.repo_id, "vcodec": self.vcodec, "expert": [list(c) for c in self.expert],
+                "turn_to_box": self.turn_to_box}
+
+    def argv(self) -> list[str]:
+        """``colorsort-takeover``'s flags that parse back into this configuration."""
+        return (["--policy", self.policy, "--out", self.out, "--variant", self.variant, "--episodes",
+                 str(self.episodes), "--handover", "{},{}".format(*self.handover), "--seed", str(self.seed),
+                 "--repo-id", self.repo_id, "--vcodec", self.vcodec]
+                + ([f"--expert={changes_text(self.expert)}"] if self.expert else [])
+                + ([] if self.turn_to_box else ["--no-turn"]))
 
     @property
     def expert_config(self) -> ExpertConfig:

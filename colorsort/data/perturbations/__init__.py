@@ -11,10 +11,10 @@ import importlib
 import pkgutil
 
 from colorsort.data.perturbations.base import Hook, Perturbation, Step, perturbed
-from colorsort.data.perturbations.registry import PERTURBATIONS, canonical, parse, register
+from colorsort.data.perturbations.registry import PERTURBATIONS, canonical, parse, register_perturbation
 
 for _module in pkgutil.iter_modules(__path__):
     if _module.name not in ("base", "registry", "holds"):
         importlib.import_module(f"{__name__}.{_module.name}")
 
-__all__ = ["PERTURBATIONS", "Hook", "Perturbation", "Step", "canonical", "parse", "perturbed", "register"]
+__all__ = ["PERTURBATIONS", "Hook", "Perturbation", "Step", "canonical", "parse", "perturbed", "register_perturbation"]

@@ -6,7 +6,7 @@ names itself for the command line (``--<name>``), the recorded settings (``setti
 (``tag``), and describes itself for a shipped policy's README (``describe``). While recording it may change
 an episode's lights (``lighting``) and, through the per-episode ``Hook`` that ``episode`` returns, the actions:
 the recorder asks each hook in turn, innermost (lowest ``order``) first, for a ``Step`` — the action stored as
-the label and the one the env executes. Adding one is one module in this package (``registry.register``).
+the label and the one the env executes. Adding one is one module in this package (``registry.register_perturbation``).
 """
 
 from __future__ import annotations

@@ -12,12 +12,12 @@ from dataclasses import dataclass
 from functools import partial
 
 from colorsort.data.perturbations.base import LightDraw, Perturbation
-from colorsort.data.perturbations.registry import register
+from colorsort.data.perturbations.registry import register_perturbation
 from colorsort.errors import ConfigError
 from colorsort.variants import VARIANTS, Variant, check_brightness
 
 
-@register
+@register_perturbation
 @dataclass(frozen=True)
 class Brightness(Perturbation):
     """A random-lights variant's brightness drawn from ``low``..``high`` [x the cell's light] instead of its own."""

@@ -20,15 +20,15 @@ import numpy as np
 
 from colorsort.data.perturbations.base import Hook, Step
 from colorsort.data.perturbations.holds import Holds
-from colorsort.data.perturbations.registry import register
+from colorsort.data.perturbations.registry import register_perturbation
 from colorsort.expert.base import Expert
 
 # a generator of its own, seeded from the episode's seed: the env's own draws (boxes, lights) are
 # untouched, so an episode recorded with late_pass differs from one without only by the delays
-STREAM = 0x1A7E
+LATE_PASS_STREAM = 0x1A7E
 
 
-@register
+@register_perturbation
 @dataclass(frozen=True)
 class LatePass(Holds):
     """Holds back the expert's belt-pass command for 0..``max_steps`` control steps each time it turns on."""
@@ -43,7 +43,7 @@ class LatePass(Holds):
         return f"every belt pass held back 0-{self.max_steps} steps"
 
     def episode(self, seed: int, expert: Expert) -> Hook:
-        return _LatePassHook(self.max_steps, np.random.default_rng([seed, STREAM]))
+        return _LatePassHook(self.max_steps, np.random.default_rng([seed, LATE_PASS_STREAM]))
 
 
 class _LatePassHook(Hook):

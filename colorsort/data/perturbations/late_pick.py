@@ -21,15 +21,15 @@ import numpy as np
 
 from colorsort.data.perturbations.base import Hook, Step
 from colorsort.data.perturbations.holds import Holds
-from colorsort.data.perturbations.registry import register
+from colorsort.data.perturbations.registry import register_perturbation
 from colorsort.expert.base import Expert
 from colorsort.variants import Variant
 
 # a generator of its own, seeded from the episode's seed: the env's own draws and late_pass's are untouched
-STREAM = 0x1A7E_0002
+LATE_PICK_STREAM = 0x1A7E_0002
 
 
-@register
+@register_perturbation
 @dataclass(frozen=True)
 class LatePick(Holds):
     """Holds the arm back for 0..``max_steps`` control steps each time the expert starts a pick."""
@@ -51,7 +51,7 @@ class LatePick(Holds):
         return f"every pick held back 0-{self.max_steps} steps"
 
     def episode(self, seed: int, expert: Expert) -> Hook:
-        return _LatePickHook(self.max_steps, np.random.default_rng([seed, STREAM]), expert)
+        return _LatePickHook(self.max_steps, np.random.default_rng([seed, LATE_PICK_STREAM]), expert)
 
 
 class _LatePickHook(Hook):

@@ -12,7 +12,7 @@ from colorsort.errors import ConfigError
 PERTURBATIONS: dict[str, type[Perturbation]] = {}
 
 
-def register[T: type[Perturbation]](cls: T) -> T:
+def register_perturbation[T: type[Perturbation]](cls: T) -> T:
     """Class decorator: make ``cls`` known by its ``name``."""
     if cls.name in PERTURBATIONS:
         raise ConfigError(f"perturbation {cls.name!r} is registered twice")

@@ -11,7 +11,6 @@ every episode the seed scored; a run that scores otherwise is refused, or with `
 from __future__ import annotations
 
 import json
-import math
 import os
 import shutil
 import string
@@ -24,6 +23,7 @@ from colorsort.errors import ConfigError, DataConflictError
 from colorsort.paths import asset_path
 from colorsort.training.dagger_config import DaggerConfig
 from colorsort.training.publishing.run_summary import curve_table, plot_demos, summary_table, table, validation_table
+from colorsort.training.publishing.tables import parameters
 from colorsort.training.recipes import RELIGHT_TEMPERATURE, Recipe
 from colorsort.training.results_file import PipelineResults, ScoreRow, Sitting
 from colorsort.variants import LIGHT_BRIGHTNESS, VALIDATION_SEEDS, get_variant
@@ -43,15 +43,7 @@ def commit(shipped: Path | None = None) -> str:
     return sha + (" (with uncommitted changes)" if dirty else "")
 
 
-def parameters(model: Path) -> int:
-    """Parameters stored in a pretrained_model folder's weights."""
-    from safetensors import safe_open
-
-    with safe_open(str(model / "model.safetensors"), "np") as f:
-        return sum(math.prod(f.get_slice(k).get_shape()) for k in f.keys())
-
-
-def machine(device: str) -> str:
+def training_machine(device: str) -> str:
     """One line: this machine's CPU cores and the training device."""
     return f"a {os.cpu_count()}-core machine, training on {'the CPU' if device == 'cpu' else device}"
 
@@ -245,10 +237,10 @@ def write_readme(recipe: Recipe, results: PipelineResults, dest: Path) -> None:
     largest = [r for r in every_seed if r.seed == training.seeds[0]]
     first = largest[0]
     values = {
-        "name": dest.name, "label": recipe.label, "description": recipe.policy.describe(parameters(dest))
+        "name": dest.name, "label": recipe.label, "description": recipe.policy.describe(parameters(dest) or 0)
         + backbone_line(recipe), "inputs": inputs_line(recipe), "size_mb": f"{policy_bytes(dest) / 1e6:.1f}",
         "stored": stored_line(recipe), "command": results.command, "recipe": recipe.name,
-        "commit": results.commit or "unknown", "started": results.started, "machine": machine(training.device),
+        "commit": results.commit or "unknown", "started": results.started, "machine": training_machine(training.device),
         "tried": demos.counts[-1], "demo_line": demo_line(recipe), "kept": first.demos, "steps": first.steps,
         "batch": training.batch_size, "train_minutes": f"{first.train_minutes:.0f}",
         "at": f" (shipped: its checkpoint after {first.checkpoint})" if first.checkpoint is not None else "",

@@ -20,11 +20,9 @@ test fails when a page differs from what its JSON gives. Kinds:
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
-import struct
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
@@ -42,7 +40,7 @@ BLOCK = re.compile(r"(<!-- scores (?P<dir>\S+) (?P<kind>\S+) -->\n)(?P<body>.*?)
 MACHINES = {"cpu": "on the CPU", "cuda": "on a GPU", "mps": "on Apple's GPU"}
 
 
-def label(scores: PipelineResults) -> str:
+def method_label(scores: PipelineResults) -> str:
     """The policy's label in a table ("ACT, sensor+wrist"), from the recipe stored with its scores.
 
     The recipe is stored in sections (``Recipe.to_json``); the shipped scores of before that, flat."""
@@ -60,7 +58,7 @@ def section(scores: PipelineResults, name: str) -> dict:
     return part if isinstance(part, dict) else scores.recipe
 
 
-def machine(scores: PipelineResults) -> str:
+def trained_on(scores: PipelineResults) -> str:
     """Where the policy trained ("on the CPU"), from its recipe's device."""
     return MACHINES[section(scores, "training").get("device", "cpu")]
 
@@ -71,15 +69,15 @@ def main_variant(scores: PipelineResults) -> str:
 
 
 def parameters(checkpoint: Path) -> int | None:
-    """The number of weights in ``checkpoint/model.safetensors``, read from the file's header (no tensor is
-    loaded); None when there is no such file."""
+    """The number of weights in ``checkpoint/model.safetensors``, read from the tensors' shapes (safetensors'
+    ``safe_open``: no tensor is loaded); None when there is no such file."""
+    from safetensors import safe_open
+
     path = checkpoint / "model.safetensors"
     if not path.is_file():
         return None
-    with path.open("rb") as f:
-        (length,) = struct.unpack("<Q", f.read(8))  # safetensors: a little-endian u64, then that much JSON
-        header = json.loads(f.read(length))
-    return sum(math.prod(t["shape"]) for name, t in header.items() if name != "__metadata__")
+    with safe_open(str(path), "np") as f:
+        return sum(math.prod(f.get_slice(k).get_shape()) for k in f.keys())
 
 
 def millions(count: int | None) -> str:
@@ -90,7 +88,7 @@ def millions(count: int | None) -> str:
 def render(scores: PipelineResults, kind: str) -> str:
     """The Markdown ``kind`` table of a baseline's ``scores.json``."""
     if kind == "table":
-        return summary_table(scores.rows, label(scores))
+        return summary_table(scores.rows, method_label(scores))
     if kind == "curve":
         if not scores.curve:
             raise ConfigError("this baseline's scores.json has no learning curve "
@@ -126,7 +124,7 @@ def mistakes_table(rows: Sequence[ScoreRow]) -> str:
     return "\n".join(lines)
 
 
-def headline(folder: Path, links_from: Path | None = None) -> str:
+def baselines_headline(folder: Path, links_from: Path | None = None) -> str:
     """A Markdown table: per baseline in ``folder`` (each subfolder with a ``scores.json``), its method, inputs,
     parameters, training (with the demos' expert settings where they differ from its preset) and success per
     variant; with several training seeds, their mean, range and how many. Each baseline links its README, relative
@@ -145,10 +143,10 @@ def headline(folder: Path, links_from: Path | None = None) -> str:
                   if any(r.checkpoint is not None for r in runs) else "")
         expert = section(scores, "demos").get("expert")  # the expert's settings changed from its preset, if any
         demos = f"{first.demos} demos" + (f" (expert `{changes_text(expert)}`)" if expert else "")
-        training = (f"{demos}, {first.steps} updates{chosen}, {span(minutes)} min {machine(scores)}"
+        training = (f"{demos}, {first.steps} updates{chosen}, {span(minutes)} min {trained_on(scores)}"
                     + (f" per seed, {len(runs)} seeds" if len(runs) > 1 else ""))
         name = path.parent.name
-        method, _, inputs = label(scores).partition(", ")
+        method, _, inputs = method_label(scores).partition(", ")
         link = Path(os.path.relpath(path.parent / "README.md", links_from)).as_posix()
         lines.append(f"| [`{name}`]({link}) | {method} | {inputs} | "
                      f"{millions(parameters(path.parent))} | {training} | {'; '.join(cells)} |")
@@ -172,7 +170,7 @@ def commands(scores: PipelineResults) -> str:
     return "; ".join([scores.command, *(f"{s.named_seeds()} added by {s.command}" for s in scores.added)])
 
 
-def fill(text: str, root: Path, page: Path | None = None) -> str:
+def fill_baseline_tables(text: str, root: Path, page: Path | None = None) -> str:
     """``text`` (of ``page``, default ``root/README.md``: links are relative to it) with every scores block
     rewritten from ``root/<dir>/scores.json``."""
     page_folder = (root / "README.md" if page is None else page).parent
@@ -180,7 +178,7 @@ def fill(text: str, root: Path, page: Path | None = None) -> str:
     def block(m: re.Match) -> str:
         if m["kind"] == "headline":
             note = f"Written by `python tools/baseline_tables.py` from `{m['dir']}/*/scores.json`:"
-            return f"{m[1]}{note}\n\n{headline(root / m['dir'], page_folder)}\n\n{m[5]}"
+            return f"{m[1]}{note}\n\n{baselines_headline(root / m['dir'], page_folder)}\n\n{m[5]}"
         path = root / m["dir"] / "scores.json"
         if not path.is_file():
             raise ConfigError(f"a scores block names {m['dir']}, which has no scores.json")
