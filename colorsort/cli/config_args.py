@@ -142,6 +142,23 @@ def _reason(err: BaseException) -> ConfigError:
     return ConfigError(" ".join(str(err).split()))
 
 
+def renamed(name: str, has_value: str, text: str, spelling: Spelling,
+            typed: dict[str, str] | None) -> tuple[str, str, str]:
+    """A flag's (name, "=" or "", value text) after its old name is translated (``Spelling.renamed``): an old switch
+    (``--overwrite``) gets the value it stands for; ``typed`` records the old name under the new path."""
+    new = spelling.renamed.get(f"--{name}")
+    if not new:
+        return name, has_value, text
+    old, (name, has_fixed, fixed) = name, new[2:].partition("=")
+    if typed is not None:
+        typed[name] = f"--{old}"
+    if has_fixed and has_value and fixed != "true":
+        raise ConfigError(f"--{old} takes no value: it stands for {new}")
+    if has_fixed and not has_value:  # a switch: --overwrite is --report.overwrite=true, and =false says no
+        has_value, text = "=", fixed
+    return name, has_value, text
+
+
 def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling,
             typed: dict[str, str] | None = None) -> list[str]:
     """``argv`` in draccus's spelling: every flag ``--path=yaml``, the older spellings translated (module doc);
@@ -156,17 +173,7 @@ def respell(cls: type, defaults: Any, argv: list[str], spelling: Spelling,
         if not token.startswith("--") or token in ("--help", "-h"):
             out.append(token)
             continue
-        name, has_value, text = token[2:].partition("=")
-        renamed = spelling.renamed.get(f"--{name}")
-        if renamed:
-            old = name
-            name, has_fixed, fixed = renamed[2:].partition("=")
-            if typed is not None:
-                typed[name] = f"--{old}"
-            if has_fixed and has_value and fixed != "true":
-                raise ConfigError(f"--{old} takes no value: it stands for {renamed}")
-            if has_fixed and not has_value:  # a switch: --overwrite is --report.overwrite=true, and =false says no
-                has_value, text = "=", fixed
+        name, has_value, text = renamed(*token[2:].partition("="), spelling, typed)
         path = name if name == CONFIG_ARG else ".".join(p.replace("-", "_") for p in name.split("."))
         hint = field_hint(cls, defaults, path, argv)
         takes_value = _bare(hint) is not bool
