@@ -104,72 +104,86 @@ class BatchedCell:
         check_device(device)
         self.device = wp.get_device(device)
         self.torch_device = torch.device("cpu" if self.device.is_cpu else f"cuda:{self.device.ordinal}")
-        s = spec
         m = copy_model(spec.model)
         m.geom_matid[:] = warp_matids(m)  # colours where Warp's renderer reads them (``cameras.py``)
-        self.substeps = s.substeps
-        self.control_dt = 1.0 / s.control_freq
-        self.layout = layout_struct(s.layout)
-        n, P = worlds, s.pool_size
+        self.substeps = spec.substeps
+        self.control_dt = 1.0 / spec.control_freq
+        self.layout = layout_struct(spec.layout)
         with wp.ScopedDevice(self.device):
-            data0 = mujoco.MjData(m)
-            data0.qpos[:] = s.qpos0
-            mujoco.mj_forward(m, data0)
-            self.m = mjw.put_model(m)
-            self.d = mjw.put_data(m, data0, nworld=n, nconmax=CONTACTS_PER_WORLD, njmax=CONSTRAINTS_PER_WORLD)
-            # the fields the cell changes per world get one row per world
-            self.m.eq_data = wp.array(np.repeat(m.eq_data[None].astype(np.float32), n, 0), dtype=mjw._src.types.vec11)
-            self.m.body_gravcomp = wp.array(np.repeat(m.body_gravcomp[None].astype(np.float32), n, 0), dtype=float)
-            self.m.geom_rgba = wp.array(np.repeat(m.geom_rgba[None].astype(np.float32), n, 0), dtype=wp.vec4)
-            self._lights: dict[str, Any] = {}  # the scene lights as built; a world's scaled by its episode's lights
-            for name in ("light_diffuse", "light_ambient", "light_specular"):
-                base = getattr(m, name).astype(np.float32)
-                setattr(self.m, name, wp.array(np.repeat(base[None], n, 0), dtype=wp.vec3))
-                self._lights[name] = torch.as_tensor(base, device=self.torch_device)
-            i32 = lambda a: wp.array(np.asarray(a, np.int32), dtype=int)  # noqa: E731
-            f32 = lambda a: wp.array(np.asarray(a, np.float32), dtype=float)  # noqa: E731
-            self.arm_qpos, self.arm_dof, self.arm_act = i32(s.arm_qpos), i32(s.arm_dof), i32(s.arm_actuators)
-            self.kp, self.kd, self.t_low, self.t_high = f32(s.kp), f32(s.kd), f32(s.torque_low), f32(s.torque_high)
-            self.box_body, self.box_geom, self.box_qpos = i32(s.box_body), i32(s.box_geom), i32(s.box_qpos)
-            self.box_dof, self.box_weld = i32(s.box_dof), i32(s.box_weld)
-            of_geom = np.full(m.ngeom, -1, np.int32)
-            of_geom[s.box_geom] = np.arange(P)
-            self.box_of_geom = i32(of_geom)
-            self.park_pos = wp.array(np.array([air_park_position(i) for i in range(P)], np.float32), dtype=wp.vec3)
-            self.palette = wp.array(np.array(list(COLORS.values()), np.float32), dtype=wp.vec4)
-            self.qpos0 = wp.array(np.repeat(s.qpos0[None].astype(np.float32), n, 0), dtype=float)
-            zi = lambda *shape: wp.zeros(shape, dtype=int)  # noqa: E731
-            self.goal = wp.zeros((n, s.n_joints), dtype=float)
-            self.suction_cmd, self.belt_pass, self.held = zi(n), zi(n), wp.full(n, -1, dtype=int)
-            self.detected, self.running = zi(n), wp.ones(n, dtype=int)
-            self.travel = wp.zeros(n, dtype=wp.float64)
-            self.candidate = wp.full(n, P, dtype=int)
-            self.vec = wp.zeros((n, m.nv), dtype=float)
-            self.res = wp.zeros((n, m.nv), dtype=float)
-            self.status, self.color = zi(n, P), zi(n, P)
-            self.bin_of, self.serial = wp.full((n, P), -1, dtype=int), wp.full((n, P), -1, dtype=int)
-            self.now, self.next_time = wp.zeros(n, dtype=wp.float64), wp.zeros(n, dtype=wp.float64)
-            self.steps, self.next_serial, self.spawned, self.bins_emptied = zi(n), zi(n), zi(n), zi(n)
-            self.n_events = zi(n)
-            E = max_boxes
-            self.ev_time = wp.zeros((n, E), dtype=wp.float64)
-            self.ev_serial, self.ev_color, self.ev_outcome, self.ev_bin = zi(n, E), zi(n, E), zi(n, E), zi(n, E)
-            self.grips = wp.full((n, E, 2), float("nan"), dtype=float)
-            self.draw_color = zi(n, E)
-            self.draw_offset, self.draw_yaw = wp.zeros((n, E), dtype=float), wp.zeros((n, E), dtype=float)
-            self.reward = wp.zeros(n, dtype=float)
-            self.action = wp.zeros((n, s.n_joints + 2), dtype=float)
-            state_layout = StateLayout(s.n_joints, s.config.tracking)
-            self.observation_layout = observation_layout(state_layout, BOX_STATE)
-            self.state = wp.zeros((n, state_layout.size), dtype=float)
-            self.env_state = wp.zeros((n, BOX_STATE.size), dtype=float)
+            self._put_model(m, worlds)
+            self._index_arrays(m)
+            self._world_arrays(m, worlds)
             self.pool, self.boxes, self.bodies, self.event_log, self.draws = self._structs()
             self.controls, self.rig = self._drives()
-            self.cameras = BatchedCameras(m, n, tuple(cameras), image_size) if cameras else None
+            self.cameras = BatchedCameras(m, worlds, tuple(cameras), image_size) if cameras else None
         self.images: dict = {}
         self._graph = None
         self.use_graph = use_graph
-        self.seeds = np.full(n, -1, np.int64)
+        self.seeds = np.full(worlds, -1, np.int64)
+
+    def _put_model(self, m: mujoco.MjModel, n: int) -> None:
+        """MuJoCo Warp's model and data of ``n`` worlds, reset to the spec's state; the model fields the cell changes
+        per world (welds, gravity compensation, colours, lights) given one row per world."""
+        import torch
+
+        data0 = mujoco.MjData(m)
+        data0.qpos[:] = self.spec.qpos0
+        mujoco.mj_forward(m, data0)
+        self.m = mjw.put_model(m)
+        self.d = mjw.put_data(m, data0, nworld=n, nconmax=CONTACTS_PER_WORLD, njmax=CONSTRAINTS_PER_WORLD)
+        self.m.eq_data = wp.array(np.repeat(m.eq_data[None].astype(np.float32), n, 0), dtype=K.vec11)
+        self.m.body_gravcomp = wp.array(np.repeat(m.body_gravcomp[None].astype(np.float32), n, 0), dtype=float)
+        self.m.geom_rgba = wp.array(np.repeat(m.geom_rgba[None].astype(np.float32), n, 0), dtype=wp.vec4)
+        self._lights: dict[str, Any] = {}  # the scene lights as built; a world's scaled by its episode's lights
+        for name in ("light_diffuse", "light_ambient", "light_specular"):
+            base = getattr(m, name).astype(np.float32)
+            setattr(self.m, name, wp.array(np.repeat(base[None], n, 0), dtype=wp.vec3))
+            self._lights[name] = torch.as_tensor(base, device=self.torch_device)
+
+    def _index_arrays(self, m: mujoco.MjModel) -> None:
+        """The spec's addresses (the arm's joints and actuators, the boxes' bodies, geoms, joints and welds), its
+        gains and torque limits, where parked boxes wait and the palette: the same for every world."""
+        s, P = self.spec, self.spec.pool_size
+        i32 = lambda a: wp.array(np.asarray(a, np.int32), dtype=int)  # noqa: E731
+        f32 = lambda a: wp.array(np.asarray(a, np.float32), dtype=float)  # noqa: E731
+        self.arm_qpos, self.arm_dof, self.arm_act = i32(s.arm_qpos), i32(s.arm_dof), i32(s.arm_actuators)
+        self.kp, self.kd, self.t_low, self.t_high = f32(s.kp), f32(s.kd), f32(s.torque_low), f32(s.torque_high)
+        self.box_body, self.box_geom, self.box_qpos = i32(s.box_body), i32(s.box_geom), i32(s.box_qpos)
+        self.box_dof, self.box_weld = i32(s.box_dof), i32(s.box_weld)
+        of_geom = np.full(m.ngeom, -1, np.int32)
+        of_geom[s.box_geom] = np.arange(P)
+        self.box_of_geom = i32(of_geom)
+        self.park_pos = wp.array(np.array([air_park_position(i) for i in range(P)], np.float32), dtype=wp.vec3)
+        self.palette = wp.array(np.array(list(COLORS.values()), np.float32), dtype=wp.vec4)
+
+    def _world_arrays(self, m: mujoco.MjModel, n: int) -> None:
+        """Each world's state beyond MuJoCo's: commands, belt, boxes, events, draws, observations, one row a world."""
+        s, P, E = self.spec, self.spec.pool_size, self.max_boxes
+        zi = lambda *shape: wp.zeros(shape, dtype=int)  # noqa: E731
+        self.qpos0 = wp.array(np.repeat(s.qpos0[None].astype(np.float32), n, 0), dtype=float)
+        self.goal = wp.zeros((n, s.n_joints), dtype=float)
+        self.suction_cmd, self.belt_pass, self.held = zi(n), zi(n), wp.full(n, -1, dtype=int)
+        self.detected, self.running = zi(n), wp.ones(n, dtype=int)
+        self.travel = wp.zeros(n, dtype=wp.float64)
+        self.candidate = wp.full(n, P, dtype=int)
+        self.vec = wp.zeros((n, m.nv), dtype=float)
+        self.res = wp.zeros((n, m.nv), dtype=float)
+        self.status, self.color = zi(n, P), zi(n, P)
+        self.bin_of, self.serial = wp.full((n, P), -1, dtype=int), wp.full((n, P), -1, dtype=int)
+        self.now, self.next_time = wp.zeros(n, dtype=wp.float64), wp.zeros(n, dtype=wp.float64)
+        self.steps, self.next_serial, self.spawned, self.bins_emptied = zi(n), zi(n), zi(n), zi(n)
+        self.n_events = zi(n)
+        self.ev_time = wp.zeros((n, E), dtype=wp.float64)
+        self.ev_serial, self.ev_color, self.ev_outcome, self.ev_bin = zi(n, E), zi(n, E), zi(n, E), zi(n, E)
+        self.grips = wp.full((n, E, 2), float("nan"), dtype=float)
+        self.draw_color = zi(n, E)
+        self.draw_offset, self.draw_yaw = wp.zeros((n, E), dtype=float), wp.zeros((n, E), dtype=float)
+        self.reward = wp.zeros(n, dtype=float)
+        self.action = wp.zeros((n, s.n_joints + 2), dtype=float)
+        state_layout = StateLayout(s.n_joints, s.config.tracking)
+        self.observation_layout = observation_layout(state_layout, BOX_STATE)
+        self.state = wp.zeros((n, state_layout.size), dtype=float)
+        self.env_state = wp.zeros((n, BOX_STATE.size), dtype=float)
 
     def _structs(self) -> tuple[A.Pool, A.Boxes, A.Bodies, A.Events, A.Draws]:
         """The per-box and per-world arrays grouped as the kernels take them (each holds the arrays above, which are
