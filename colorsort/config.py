@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 
 # Box and bin colours the cell knows, as RGBA in [0, 1]. Red, green and blue have bins.
 COLORS: dict[str, tuple[float, float, float, float]] = {
@@ -145,7 +145,7 @@ class TaskConfig:
             raise ConfigError(f"box_colors must be a non-empty tuple of colours from {sorted(COLORS)}")
         unknown = [c for c in self.box_colors if c not in COLORS]
         if unknown:
-            raise ConfigError(f"Unknown box colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
+            raise UnknownName("box colour(s)", unknown, sorted(COLORS), "colours")
         object.__setattr__(self, "box_colors", tuple(self.box_colors))
 
 
@@ -220,9 +220,9 @@ def make_config(preset: str = "default", **overrides: Any) -> TaskConfig:
         ValueError: unknown preset, unknown field, or an invalid value.
     """
     if preset not in PRESETS:
-        raise ConfigError(f"Unknown preset {preset!r}. Valid presets: {sorted(PRESETS)}")
+        raise UnknownName("preset", preset, sorted(PRESETS), "presets")
     fields = {f.name for f in dataclasses.fields(TaskConfig)}
     unknown = sorted(set(overrides) - fields)
     if unknown:
-        raise ConfigError(f"Unknown config field(s) {unknown}. Valid fields: {sorted(fields)}")
+        raise UnknownName("config field(s)", unknown, sorted(fields), "fields")
     return dataclasses.replace(PRESETS[preset], **overrides)

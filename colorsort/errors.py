@@ -8,7 +8,7 @@ place that maps them to exit codes, for every CLI (``colorsort.cli.run.guarded``
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
@@ -19,6 +19,22 @@ class ColorSortError(Exception):
 
 class ConfigError(ColorSortError, ValueError):
     """An invalid setting, argument or name; the message names the valid choices."""
+
+
+class UnknownName(ConfigError):
+    """A name looked up that is not there; the message and ``valid`` list every name that is, as mink's
+    ``InvalidFrame`` does.
+
+    Args:
+        kind: what was looked up ("shift", "colour(s)").
+        name: what was asked for: a name, or a list of them.
+        valid: every valid name, in the order to show them.
+        plural: ``kind`` in the plural, before the list (default: ``kind`` + "s").
+    """
+
+    def __init__(self, kind: str, name: object, valid: Iterable[object], plural: str | None = None):
+        self.kind, self.name, self.valid = kind, name, list(valid)
+        super().__init__(f"Unknown {kind} {name!r}. Valid {plural or kind + 's'}: {self.valid}")
 
 
 class ActionError(ColorSortError, ValueError):

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 from colorsort.paths import asset_path
 
 GRIPPERS: tuple[str, ...] = ("SuctionGripper", "default")
@@ -97,17 +97,19 @@ ROBOTS: dict[str, RobotSpec] = {
 def get_robot(name: str) -> RobotSpec:
     """The spec of robot ``name``; ``ValueError`` naming the valid robots otherwise."""
     if name not in ROBOTS:
-        raise ConfigError(f"Unknown robot {name!r}. Valid robots: {list(ROBOTS)}")
+        raise UnknownName("robot", name, list(ROBOTS), "robots")
     return ROBOTS[name]
 
 
 def checked_robot(robots: str | list[str], gripper_types: str) -> str:
     """The one robot ``robots`` names, checked with its gripper; ``ConfigError`` naming the valid ones otherwise."""
     robot_list = [robots] if isinstance(robots, str) else list(robots)
-    if len(robot_list) != 1 or robot_list[0] not in ROBOTS:
+    if len(robot_list) != 1:
         raise ConfigError(f"ColorSort takes one robot; got {robots!r}. Valid robots: {list(ROBOTS)}")
+    if robot_list[0] not in ROBOTS:
+        raise UnknownName("robot", robot_list[0], list(ROBOTS), "robots")
     if gripper_types not in GRIPPERS:
-        raise ConfigError(f"Unknown gripper {gripper_types!r}. Valid grippers: {list(GRIPPERS)}")
+        raise UnknownName("gripper", gripper_types, list(GRIPPERS), "grippers")
     if gripper_types == "default" and robot_list[0] != "IRB140":
         raise ConfigError(f"{robot_list[0]}'s default gripper cannot pick 0.1 m boxes; use 'SuctionGripper'")
     return robot_list[0]

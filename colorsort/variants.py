@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from colorsort.config import COLORS, Lighting, TaskConfig, check_range, make_config, sorting_time_limit
-from colorsort.errors import ConfigError
+from colorsort.errors import UnknownName
 from colorsort.robots import get_robot
 
 EVAL_SEEDS: tuple[int, ...] = tuple(range(10_000, 10_050))  # 50 seeds no collector default reaches
@@ -121,7 +121,7 @@ DEFAULT_GYM_ID = "colorsort/ColorSort-v0"
 def get_variant(name: str) -> Variant:
     """The variant called ``name``; ValueError naming the valid ones otherwise."""
     if name not in VARIANTS:
-        raise ConfigError(f"Unknown variant {name!r}. Valid variants: {list(VARIANTS)}")
+        raise UnknownName("variant", name, list(VARIANTS), "variants")
     return VARIANTS[name]
 
 

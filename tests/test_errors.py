@@ -44,3 +44,21 @@ def test_a_guarded_main_prints_one_line_and_returns_the_status(capsys):
     assert main_raising(KeyboardInterrupt())([]) == 130
     with pytest.raises(ZeroDivisionError):  # a bug is not an error of the user's: its traceback stays
         main_raising(ZeroDivisionError())([])
+
+
+@pytest.mark.parametrize("lookup, valid_one", [
+    (lambda: __import__("colorsort.variants", fromlist=["x"]).get_variant("hard"), "default"),
+    (lambda: __import__("colorsort.training.recipes", fromlist=["x"]).get_recipe("big"), "camera-snapshot-touch-dr"),
+    (lambda: __import__("colorsort.shifts", fromlist=["x"]).parse_shifts("bogus:1"), "box-size"),
+    (lambda: make_config("turbo"), "tracking-fast"),
+    (lambda: __import__("colorsort.robots", fromlist=["x"]).checked_robot("Sawyer", "SuctionGripper"), "IRB140"),
+    (lambda: __import__("colorsort.data.perturbations", fromlist=["x"]).parse("late_drop", "3"), "late_pass"),
+])
+def test_a_name_looked_up_and_not_there_lists_every_valid_one(lookup, valid_one):
+    """As mink's ``InvalidFrame``: ``UnknownName`` (a ``ConfigError``, so a ``ValueError``) carries and names them."""
+    from colorsort.errors import UnknownName
+
+    with pytest.raises(UnknownName) as caught:
+        lookup()
+    assert valid_one in caught.value.valid and repr(valid_one) in str(caught.value)
+    assert isinstance(caught.value, ValueError)

@@ -19,7 +19,7 @@ import warp as wp
 
 from colorsort.cell.cameras import CAMERAS, mjcf_name
 from colorsort.cell.snapshot import SNAPSHOT, SOURCE
-from colorsort.errors import ConfigError
+from colorsort.errors import UnknownName
 
 VISIBLE_GROUPS = [1, 2]  # robosuite's off-screen renderer hides group 0, the collision geoms
 DEFAULT_RGBA = np.array([0.5, 0.5, 0.5, 1.0], np.float32)  # MuJoCo's geom rgba when none is given
@@ -50,7 +50,7 @@ class BatchedCameras:
 
         unknown = [c for c in cameras if c not in CAMERAS]
         if unknown:
-            raise ConfigError(f"Unknown camera(s) {unknown}. Valid cameras: {list(CAMERAS)}")
+            raise UnknownName("camera(s)", unknown, list(CAMERAS), "cameras")
         self.cameras, self.size, self.worlds = tuple(cameras), tuple(size), worlds
         live = {SOURCE if c == SNAPSHOT else c for c in cameras}
         names = [model.camera(i).name for i in range(model.ncam)]

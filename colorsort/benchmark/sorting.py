@@ -20,7 +20,7 @@ from colorsort.config import BIN_COLORS, PRESETS, check_range, make_config, sort
 from colorsort.data.video import VideoWriter, contact_sheet, draw_lines, save_png
 from colorsort.envs.robosuite_task import ColorSort
 from colorsort.envs.rollout import CellEpisode, Observer, Step, rollout
-from colorsort.errors import ConfigError
+from colorsort.errors import UnknownName
 from colorsort.expert.base import Expert
 from colorsort.expert.factory import make_expert
 from colorsort.robots import get_robot
@@ -52,7 +52,7 @@ class SortConfig:
 
     def __post_init__(self) -> None:
         if self.preset not in PRESETS:
-            raise ConfigError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
+            raise UnknownName("preset", self.preset, sorted(PRESETS), "presets")
         get_robot(self.robot)
         check_range("boxes", self.boxes, 1, 10_000)
 

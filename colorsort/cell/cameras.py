@@ -18,7 +18,7 @@ import numpy as np
 from robosuite.utils.observables import sensor
 
 from colorsort.cell.snapshot import SNAPSHOT, SOURCE, Snapshot
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 
 PHYSICAL_CAMERAS: tuple[str, ...] = ("scene", "sensor", "wrist")  # rendered live; an env's cameras by default
 CAMERAS: tuple[str, ...] = (*PHYSICAL_CAMERAS, SNAPSHOT)
@@ -38,7 +38,7 @@ def check_cameras(cameras: list[str] | tuple[str, ...]) -> None:
     """``ValueError`` naming the valid cameras unless every name is one of ``CAMERAS``."""
     unknown = [c for c in cameras if c not in CAMERAS]
     if unknown:
-        raise ConfigError(f"Unknown camera(s) {unknown}. Valid cameras: {list(CAMERAS)}")
+        raise UnknownName("camera(s)", unknown, list(CAMERAS), "cameras")
 
 
 def mjcf_name(camera: str) -> str:

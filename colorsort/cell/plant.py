@@ -21,7 +21,7 @@ from colorsort.cell.observation import BOX_STATE
 from colorsort.cell.referee import Referee
 from colorsort.cell.suction import VacuumSeal
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, Lighting, TaskConfig
-from colorsort.errors import ConfigError, PlanningError
+from colorsort.errors import PlanningError, UnknownName
 
 # The parts of MuJoCo's state that ColorSort changes while it runs.
 MJ_STATE_SPEC = (mujoco.mjtState.mjSTATE_FULLPHYSICS | mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE
@@ -128,7 +128,7 @@ class Plant:
     def put_box(self, color: str, x: float, y: float, yaw: float = 0.0) -> Box:
         """Take a box from the pool and set it down on the belt at (x, y) [m], turned ``yaw`` [rad]."""
         if color not in COLORS:
-            raise ConfigError(f"Unknown colour {color!r}. Valid colours: {sorted(COLORS)}")
+            raise UnknownName("colour", color, sorted(COLORS), "colours")
         parked = self.pool.parked()
         if not parked:
             raise PlanningError(f"All {len(self.pool.boxes)} boxes of the pool are in play")

@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass, field
 from colorsort.cell.cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from colorsort.config import PRESETS, TaskConfig, check_range, make_config
 from colorsort.data.perturbations import Perturbation, canonical
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 from colorsort.executors.base import DEFAULT_SHARD_SIZE, ExecutorConfig
 from colorsort.expert.config import ExpertConfig, recording_expert
 from colorsort.robots import get_robot
@@ -21,7 +21,7 @@ VCODECS = ("h264", "libsvtav1", "hevc")
 def check_vcodec(vcodec: str) -> None:
     """ConfigError naming the valid codecs unless ``vcodec`` is one of ``VCODECS``."""
     if vcodec not in VCODECS:
-        raise ConfigError(f"Unknown vcodec {vcodec!r}. Valid codecs: {list(VCODECS)}")
+        raise UnknownName("vcodec", vcodec, list(VCODECS), "codecs")
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ class CollectConfig:
                 raise ConfigError(f"variant {self.variant!r} sets the preset ({v.preset!r}) and robot ({v.robot!r}); "
                                  f"got preset={self.preset!r}, robot={self.robot!r}: give the variant alone")
         if self.preset not in PRESETS:
-            raise ConfigError(f"Unknown preset {self.preset!r}. Valid presets: {sorted(PRESETS)}")
+            raise UnknownName("preset", self.preset, sorted(PRESETS), "presets")
         get_robot(self.robot)
         bad = [c for c in self.cameras if c not in CAMERAS]
         if bad or len(set(self.cameras)) != len(self.cameras):

@@ -24,7 +24,7 @@ from colorsort.data.store import MARKER
 from colorsort.data.video import VideoWriter, contact_sheet, save_png
 from colorsort.envs.robosuite_task import ColorSort
 from colorsort.envs.schema import ACTION, ENV_STATE, SIM_STATE, STATE, box_state, image_key, robot_state
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 
 # re-rendered vs decoded frames, worst frame: measured 26.6 dB at 64 px, 29.1 dB at 128 px (h264, crf 30)
 MIN_PSNR_DB = 24.0
@@ -201,7 +201,7 @@ def replay(root: str | Path, index: int, camera: str = "scene", size: tuple[int,
            video: str | None = None, sheet: str | None = None, progress: bool = True) -> ReplayCheck:
     """State replay (render, compare) and action replay of one episode, as the module docstring says."""
     if camera not in CAMERAS:
-        raise ConfigError(f"Unknown camera {camera!r}. Valid cameras: {list(CAMERAS)}")
+        raise UnknownName("camera", camera, list(CAMERAS), "cameras")
     episode = load_episode(root, index)
     recorded_size = tuple(episode.settings["image_size"])
     size = tuple(size or recorded_size)

@@ -31,7 +31,7 @@ from lerobot.utils.constants import ACTION, OBS_ENV_STATE, OBS_IMAGES, OBS_STATE
 from colorsort.cell.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, parse_cameras
 from colorsort.config import BACKENDS
 from colorsort.envs.schema import ENV_STATE_SIZE, state_size
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 from colorsort.robots import ROBOTS
 from colorsort.shifts import parse_shifts
 from colorsort.variants import Variant, get_variant, gym_ids
@@ -95,7 +95,7 @@ def variant_of_task(task: str) -> Variant:
     gym_id = f"{NAMESPACE}/{task}"
     if gym_id not in ids:
         valid = sorted(i.removeprefix(f"{NAMESPACE}/") for i in ids)
-        raise ConfigError(f"Unknown ColorSort task {task!r}. Valid tasks: {valid}")
+        raise UnknownName("ColorSort task", task, valid, "tasks")
     return get_variant(ids[gym_id])
 
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from colorsort.config import check_range
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 
 EXECUTORS = ("local", "ray")
 DEFAULT_SHARD_SIZE = 32  # episodes per task: a few dozen, so a cluster merges hundreds of shards, not thousands
@@ -39,7 +39,7 @@ class ExecutorConfig:
 
     def __post_init__(self) -> None:
         if self.name not in EXECUTORS:
-            raise ConfigError(f"Unknown executor {self.name!r}. Valid executors: {list(EXECUTORS)}")
+            raise UnknownName("executor", self.name, list(EXECUTORS), "executors")
         check_range("workers", self.workers, 1, 100_000)
         check_range("retries", self.retries, 0, 100)
         if self.address is not None and self.name != "ray":

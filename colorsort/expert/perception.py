@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from colorsort.config import BIN_COLORS, COLORS, CellLayout, check_range
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 from colorsort.expert.colour_classes import ColourClasses, TaughtColours
 
 UNKNOWN = "unknown"
@@ -108,7 +108,7 @@ class PerceptionConfig:
     def __post_init__(self) -> None:
         unknown = [c for c in self.colors if c not in COLORS]
         if unknown:
-            raise ConfigError(f"Unknown colour(s) {unknown}. Valid colours: {sorted(COLORS)}")
+            raise UnknownName("colour(s)", unknown, sorted(COLORS), "colours")
         check_range("tolerance", self.tolerance, 1.0, 100.0)
         for name in ("min_saturation", "min_value", "min_area"):
             check_range(name, getattr(self, name), 0.0, 1.0)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 from colorsort.shifts.base import LEVELS, TRAIN, Shift
 
 SHIFTS: dict[str, Shift] = {}
@@ -55,7 +55,7 @@ def parse_one(text: str) -> list[ShiftLevel]:
         raise ConfigError(f"shift {text!r}: give NAME:LEVEL, e.g. camera-pose:2; names: {valid}; "
                           f"levels: {[*LEVELS, TRAIN]}")
     if name not in valid:
-        raise ConfigError(f"Unknown shift {name!r}. Valid shifts: {valid}")
+        raise UnknownName("shift", name, valid, "shifts")
     if level_text == TRAIN:
         if name == ALL:
             return [ShiftLevel(n, TRAIN) for n in trainable()]

@@ -35,7 +35,7 @@ from colorsort.data.perturbations import Perturbation
 from colorsort.data.perturbations.brightness import Brightness
 from colorsort.data.perturbations.late_pass import LatePass
 from colorsort.data.perturbations.late_pick import LatePick
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 from colorsort.shifts.registry import trainable, training_shifts
 from colorsort.training.dagger_config import DaggerConfig
 from colorsort.training.demos_config import DemosConfig, at_least_one
@@ -241,7 +241,7 @@ class Recipe:
             elif key in valid:
                 sections[section][name] = value
             else:
-                raise ConfigError(f"Unknown recipe setting {key!r}. Valid settings: {sorted(valid)}")
+                raise UnknownName("recipe setting", key, sorted(valid), "settings")
         new = {s: replace(getattr(self, s), **c) for s, c in sections.items() if c}
         return replace(self, **new)
 
@@ -330,5 +330,5 @@ RECIPES: dict[str, Recipe] = {r.name: r for r in (
 def get_recipe(name: str, changes: dict[str, Any] | None = None) -> Recipe:
     """The preset ``name`` with ``changes`` (``Recipe.override``); ConfigError naming the valid presets otherwise."""
     if name not in RECIPES:
-        raise ConfigError(f"Unknown recipe {name!r}. Valid recipes: {list(RECIPES)}")
+        raise UnknownName("recipe", name, list(RECIPES), "recipes")
     return RECIPES[name].override(changes or {})

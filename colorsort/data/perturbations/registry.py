@@ -7,7 +7,7 @@ from collections.abc import Iterable, Sequence
 import draccus
 
 from colorsort.data.perturbations.base import Perturbation
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 
 PERTURBATIONS: dict[str, type[Perturbation]] = {}
 
@@ -24,7 +24,7 @@ def register_perturbation[T: type[Perturbation]](cls: T) -> T:
 def parse(name: str, text: str) -> Perturbation:
     """The perturbation ``name`` with the command-line value ``text``."""
     if name not in PERTURBATIONS:
-        raise ConfigError(f"Unknown perturbation {name!r}. Valid perturbations: {sorted(PERTURBATIONS)}")
+        raise UnknownName("perturbation", name, sorted(PERTURBATIONS), "perturbations")
     return PERTURBATIONS[name].parse(text)
 
 

@@ -27,7 +27,7 @@ from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
-from colorsort.errors import ConfigError
+from colorsort.errors import ConfigError, UnknownName
 from colorsort.expert.config import changes_text
 from colorsort.training.method_names import method_name
 from colorsort.training.publishing.run_summary import curve_table, scored_checkpoints, span, summary_table
@@ -96,7 +96,7 @@ def render(scores: PipelineResults, kind: str) -> str:
         return curve_table(scores.curve)
     if kind == "mistakes":
         return mistakes_table(scores.rows)
-    raise ConfigError(f"Unknown table kind {kind!r}. Valid kinds: {list(KINDS)}")
+    raise UnknownName("table kind", kind, list(KINDS), "kinds")
 
 
 def largest_by_variant(rows: Sequence[ScoreRow]) -> dict[str, list[ScoreRow]]:
