@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 import robosuite as suite
 
+from colorsort.config import BoxStyle
 from colorsort.envs.robosuite_task import ColorSort
 
 TINY = dict(episodes=2, image_size=(64, 64), cameras=("scene", "wrist"))  # two one-box episodes
@@ -154,3 +155,7 @@ def python_script(path: Path, argv: list[str], cwd: Path) -> subprocess.Complete
 
     return in_this_process(main, [str(path), *argv], cwd)
 
+
+# the boxes a touch-off must find the top of without being told it: cubes of 5 to 15 cm and a puck
+TOUCH_STYLES = {f"cube {round(100 * h)} cm": BoxStyle("box", h, h) for h in (0.05, 0.07, 0.10, 0.13, 0.15)}
+TOUCH_STYLES["puck 12 x 6 cm"] = BoxStyle("cylinder", 0.12, 0.06)

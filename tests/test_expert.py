@@ -5,10 +5,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from helpers import exit_status
+from helpers import TOUCH_STYLES, exit_status
 
 from colorsort.cli.sort import main as sort_main
-from colorsort.config import BoxStyle
 from colorsort.expert.config import STOPPING_EXPERT
 from colorsort.expert.factory import make_expert
 from colorsort.expert.planning import site_yaw
@@ -68,10 +67,6 @@ def test_turns_the_cup_to_a_turned_box_only_when_asked(turn, make_env):
     assert np.abs(quarter(box_yaws)).max() > np.deg2rad(15)  # the boxes were turned
     want = quarter(box_yaws) if turn else np.zeros(3)
     np.testing.assert_allclose(quarter(np.subtract(cup_turns, want)), 0, atol=np.deg2rad(3))
-
-
-TOUCH_STYLES = {f"cube {round(100 * h)} cm": BoxStyle("box", h, h) for h in (0.05, 0.07, 0.10, 0.13, 0.15)}
-TOUCH_STYLES["puck 12 x 6 cm"] = BoxStyle("cylinder", 0.12, 0.06)
 
 
 @pytest.mark.parametrize("name", list(TOUCH_STYLES))

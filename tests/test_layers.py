@@ -127,18 +127,13 @@ def test_no_module_imports_another_packages_private_modules():
     assert private == []
 
 
-# Functions still over 60 lines, each to be split where the split names a concept (issue #117); none may join them.
-LONG_FUNCTIONS: set[str] = set()
-
-
 def test_no_function_grows_past_60_lines():
     long = set()
     for name, path in modules():
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and node.end_lineno - node.lineno >= 60:
                 long.add(f"{name}.{node.name}")
-    assert long <= LONG_FUNCTIONS, f"over 60 lines: {sorted(long - LONG_FUNCTIONS)}"
-    assert long == LONG_FUNCTIONS, f"now short: {sorted(LONG_FUNCTIONS - long)}: take them off the list"
+    assert not long, f"over 60 lines: split where the split names a concept: {sorted(long)}"
 
 
 def test_the_layers_are_the_packages_folders():
@@ -197,12 +192,9 @@ def test_no_private_name_crosses_a_module():
 PER_MODULE = {"main", "parse_args", "SPELLING", "PRELOAD"}
 # public names still defined in two modules with two meanings ("one name per concept"): to be renamed; none may be
 # added to this list
-TWO_MEANINGS: set[str] = set()
-
-
 def test_a_public_name_is_defined_in_one_module():
     """A top-level public class, function or constant means one thing: defined in one module (console scripts'
-    ``main`` and ``parse_args`` aside, and the few names ``TWO_MEANINGS`` lists until they are renamed)."""
+    ``main`` and ``parse_args`` aside)."""
     defined: dict[str, list[str]] = {}
     for name, path in modules():
         for node in ast.parse(path.read_text()).body:
@@ -211,5 +203,5 @@ def test_a_public_name_is_defined_in_one_module():
             for found in names:
                 if not found.startswith("_") and (isinstance(node, ast.ClassDef | ast.FunctionDef) or found.isupper()):
                     defined.setdefault(found, []).append(name)
-    twice = {n: ms for n, ms in defined.items() if len(ms) > 1 and n not in TWO_MEANINGS | PER_MODULE}
+    twice = {n: ms for n, ms in defined.items() if len(ms) > 1 and n not in PER_MODULE}
     assert not twice, f"public names defined in more than one module: {twice}"

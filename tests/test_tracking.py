@@ -2,8 +2,9 @@
 
 import numpy as np
 import pytest
+from helpers import TOUCH_STYLES
 
-from colorsort.config import BIN_COLORS, BoxStyle
+from colorsort.config import BIN_COLORS
 from colorsort.expert.base import Cycle
 from colorsort.expert.config import TRACKING_EXPERT, changed
 from colorsort.expert.factory import make_expert
@@ -65,10 +66,6 @@ def test_a_longer_hold_keeps_the_sealed_box_on_the_moving_belt_for_it_and_every_
         assert [e.outcome for e in env.events[:2]] == ["placed"] * 2, env.events
         held_on_belt[hold] = steps / 2
     assert held_on_belt[TRACKING_EXPERT.track_hold_time] <= 1 and held_on_belt[0.15] >= 3
-
-
-TOUCH_STYLES = {f"cube {round(100 * h)} cm": BoxStyle("box", h, h) for h in (0.05, 0.07, 0.10, 0.13, 0.15)}
-TOUCH_STYLES["puck 12 x 6 cm"] = BoxStyle("cylinder", 0.12, 0.06)
 
 
 @pytest.mark.parametrize("name", list(TOUCH_STYLES))

@@ -118,9 +118,8 @@ class ColorSortEnv(EnvConfig):
     def __post_init__(self) -> None:
         if self.task is None:
             raise ConfigError("--env.task: give a ColorSort task, e.g. ColorSort-Default-v0 (colorsort-eval --list)")
-        if self.backend not in BACKENDS:
-            raise ConfigError(f"--env.backend={self.backend!r}; valid backends: {list(BACKENDS)}")
-        parse_shifts(self.shift)  # ValueError naming the valid shifts and levels
+        BackendName.check(self.backend)  # as draccus checks them (from Python: the same ConfigError)
+        ShiftText.check(self.shift)
         variant = variant_of_task(self.task)
         n = ROBOTS[variant.robot].n_joints
         self.features = {

@@ -26,28 +26,10 @@ import numpy as np
 
 from colorsort.errors import ConfigError
 from colorsort.paths import ASSETS_DIR
+from colorsort.shifts.colour import lab_of_linear, lab_to_srgb, linear
 
 SHIPPED = ASSETS_DIR / "sensor" / "taught_colours.json"  # what ``python -m colorsort.expert.teach`` writes
 AGREEMENT = 0.1  # largest |log| difference between the rails' and the belt's gains that counts as the same light
-
-# sRGB (D65): linear RGB -> XYZ, and the white point
-_M = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750],
-               [0.0193339, 0.1191920, 0.9503041]])
-_WHITE = _M @ np.ones(3)
-
-
-def linear(rgb: np.ndarray) -> np.ndarray:
-    """Linear RGB of sRGB values in [0, 255] (any shape ending in 3), unclipped above."""
-    c = np.asarray(rgb, np.float64) / 255.0
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def lab_of_linear(lin: np.ndarray) -> np.ndarray:
-    """CIELAB (L* in [0, 100] for colours in gamut) of linear RGB (any shape ending in 3)."""
-    t = (lin @ _M.T) / _WHITE
-    f = np.where(t > (6 / 29) ** 3, np.cbrt(t), t / (3 * (6 / 29) ** 2) + 4 / 29)
-    return np.stack([116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])], axis=-1)
-
 
 Triple = tuple[float, float, float]
 
@@ -56,15 +38,6 @@ def triple(values) -> Triple:
     """Three numbers as a tuple of floats (a colour)."""
     a, b, c = (float(v) for v in values)
     return (a, b, c)
-
-
-def pixel_of_lab(lab: np.ndarray) -> np.ndarray:
-    """sRGB values [0-255] (3,) of a CIELAB colour, unclipped."""
-    L, a, b = lab
-    fy = (L + 16) / 116
-    f = np.array([fy + a / 500, fy, fy - b / 200])
-    lin = np.linalg.solve(_M, np.where(f > 6 / 29, f**3, 3 * (6 / 29) ** 2 * (f - 4 / 29)) * _WHITE)
-    return 255 * np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.abs(lin) ** (1 / 2.4) * np.sign(lin) - 0.055)
 
 
 @dataclass(frozen=True)
@@ -118,7 +91,7 @@ class ColourClasses:
             raise ConfigError(f"colour classes {missing} were not taught; taught: {sorted(taught.centres)}")
         self.names, self.tolerance = names, tolerance
         self._lab = np.array([taught.centres[n] for n in names])  # (k, 3)
-        self._brightness = np.array([pixel_of_lab(lab).max() for lab in self._lab])  # (k,) [0-255]
+        self._brightness = np.array([255 * lab_to_srgb(lab).max() for lab in self._lab])  # (k,) [0-255]
         self._rails, self._belt = np.asarray(taught.rails, float), np.asarray(taught.belt, float)
 
     def light_gain(self, rails: np.ndarray, belt: np.ndarray) -> np.ndarray:
@@ -136,7 +109,7 @@ class ColourClasses:
         rgb = np.asarray(rgb, np.float64)
         brightness = np.maximum(rgb.max(axis=-1), 1.0)[..., None, None]  # (..., 1, 1)
         scaled = rgb[..., None, :] * (self._brightness[:, None] / brightness)  # (..., k, 3)
-        return np.linalg.norm(lab_of_linear(linear(scaled)) - self._lab, axis=-1)
+        return np.linalg.norm(lab_of_linear(linear(scaled / 255.0)) - self._lab, axis=-1)
 
     def label(self, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(class index per pixel, ``len(names)`` where none is within ``tolerance``; the distance to the nearest

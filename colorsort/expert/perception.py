@@ -78,6 +78,12 @@ class CameraModel:
         t = (z - self.position[2]) / rays[:, 2]
         return self.position + t[:, None] * rays
 
+    def polygon_mask(self, corners: np.ndarray | list) -> np.ndarray:
+        """The mask (H, W) uint8 of the pixels that see the convex polygon of world ``corners`` (n, 3) [m], in order."""
+        mask = np.zeros((self.height, self.width), np.uint8)
+        cv2.fillConvexPoly(mask, np.round(self.world_to_pixel(np.asarray(corners, float))).astype(np.int32), 1)
+        return mask
+
     def world_to_pixel(self, points: np.ndarray) -> np.ndarray:
         """Pixel coordinates (n, 2) [px, (column, row)] of world points (n, 3) [m]."""
         p = (np.atleast_2d(points) - self.position) @ self.rotation  # camera frame, (n, 3)
@@ -138,6 +144,24 @@ class Detection:
     area: int
 
 
+def surface_masks(camera: CameraModel, layout: CellLayout) -> tuple[np.ndarray, np.ndarray]:
+    """Boolean masks (H, W) of the pixels of ``camera`` that see the rails' top faces and the belt, inside their
+    edges: the references the sensor measures the light on."""
+    half = layout.belt_width / 2
+    xs = camera.pixel_to_plane(np.array([[0.0, camera.height / 2], [camera.width, camera.height / 2]]),
+                               layout.belt_top_z)[:, 0]
+    x0, x1 = xs.min() - 1, xs.max() + 1
+
+    def strip(y0: float, y1: float, z: float) -> np.ndarray:
+        mask = camera.polygon_mask([(x0, y0, z), (x0, y1, z), (x1, y1, z), (x1, y0, z)])
+        return cv2.erode(mask, np.ones((3, 3), np.uint8)).astype(bool)
+
+    y, rail = layout.belt_y, half + 0.012  # the arena's rails: 2 cm wide, their centres 12 mm outside the belt's edges
+    top = layout.belt_top_z + 0.02
+    rails = strip(y - rail - 0.006, y - rail + 0.006, top) | strip(y + rail - 0.006, y + rail + 0.006, top)
+    return rails, strip(y - half + 0.02, y + half - 0.02, layout.belt_top_z)
+
+
 def wrap_quarter_turn(angle: float) -> float:
     """``angle`` [rad] mapped into [-pi/4, pi/4): the yaw of a cube, which repeats every quarter turn."""
     return float((angle + np.pi / 4) % (np.pi / 2) - np.pi / 4)
@@ -179,7 +203,7 @@ class ColorSensor:
         self._roi_inner = cv2.erode(self._roi, np.ones((3, 3), np.uint8)).astype(bool)  # not on its edge
         self._kernel = np.ones((3, 3), np.uint8)
         self._min_s, self._min_v = config.min_saturation, config.min_value
-        self._rails, self._belt = self.surface_masks()
+        self._rails, self._belt = surface_masks(camera, layout)
         self._labels = list(config.colors) + [UNKNOWN]
 
     def _belt_roi(self) -> np.ndarray:
@@ -193,31 +217,7 @@ class ColorSensor:
         xs = cam.pixel_to_plane(np.array([[0.0, cam.height / 2], [cam.width, cam.height / 2]]), self.top_z)[:, 0]
         corners = np.array([[x, L.belt_y + s * half, self.top_z]
                             for x in (xs.min() - 1, xs.max() + 1) for s in (-1, 1)])
-        px = cam.world_to_pixel(corners[[0, 1, 3, 2]])
-        roi = np.zeros((cam.height, cam.width), np.uint8)
-        cv2.fillConvexPoly(roi, np.round(px).astype(np.int32), 1)
-        return roi
-
-    def surface_masks(self) -> tuple[np.ndarray, np.ndarray]:
-        """Boolean masks (H, W) of the pixels that see the rails' top faces and the belt, inside their edges: the
-        references the light is measured on."""
-        L, cam = self.layout, self.camera
-        half = L.belt_width / 2
-        xs = cam.pixel_to_plane(np.array([[0.0, cam.height / 2], [cam.width, cam.height / 2]]), L.belt_top_z)[:, 0]
-        x0, x1 = xs.min() - 1, xs.max() + 1
-
-        def strip(y0: float, y1: float, z: float) -> np.ndarray:
-            corners = np.array([[x, y, z] for x in (x0, x1) for y in (y0, y1)])
-            mask = np.zeros((cam.height, cam.width), np.uint8)
-            cv2.fillConvexPoly(mask, np.round(cam.world_to_pixel(corners[[0, 1, 3, 2]])).astype(np.int32), 1)
-            return cv2.erode(mask, self._kernel).astype(bool)
-
-        rail_y = half + 0.012  # the arena's rails: 2 cm wide, their centres 12 mm outside the belt's edges
-        top = L.belt_top_z + 0.02
-        rails = strip(L.belt_y - rail_y - 0.006, L.belt_y - rail_y + 0.006, top) | strip(
-            L.belt_y + rail_y - 0.006, L.belt_y + rail_y + 0.006, top)
-        belt = strip(L.belt_y - half + 0.02, L.belt_y + half - 0.02, L.belt_top_z)
-        return rails, belt
+        return cam.polygon_mask(corners[[0, 1, 3, 2]])
 
     def light_corrected(self, image: np.ndarray) -> np.ndarray:
         """``image`` (H, W, 3) uint8 as it would look under the lights the classes were taught under, as float."""

@@ -18,12 +18,12 @@ from __future__ import annotations
 import argparse
 import json
 
-import cv2
 import numpy as np
 
 from colorsort.config import BIN_COLORS
-from colorsort.expert.colour_classes import SHIPPED, TaughtColours, lab_of_linear, linear, triple
-from colorsort.expert.perception import CameraModel, ColorSensor
+from colorsort.expert.colour_classes import SHIPPED, TaughtColours, triple
+from colorsort.expert.perception import CameraModel, surface_masks
+from colorsort.shifts.colour import lab_of_linear, linear
 
 PLACEMENTS = ((0.0, 0.0), (0.03, 0.0), (-0.03, 0.0), (0.0, 30.0))  # (offset from the centre line [m], yaw [deg])
 
@@ -38,8 +38,7 @@ def teach(size: int = 128, classes: tuple[str, ...] = BIN_COLORS) -> TaughtColou
     try:
         env.reset()
         camera = CameraModel.from_sim(env.mj_model, env.mj_data, "sensor", size, size)
-        sensor = ColorSensor(camera, env.layout, taught=_NOTHING)
-        rails_mask, belt_mask = sensor.surface_masks()
+        rails_mask, belt_mask = surface_masks(camera, env.layout)
         px, py, top = env.layout.pick_point
         centres, rails, belt = {}, [], []
         for name in classes:
@@ -53,7 +52,7 @@ def teach(size: int = 128, classes: tuple[str, ...] = BIN_COLORS) -> TaughtColou
                 pixels.append(image[face_mask(camera, (px, py + dy, top), np.deg2rad(yaw), env.layout.box_size)])
                 rails.append(np.median(image[rails_mask], axis=0))
                 belt.append(np.median(image[belt_mask], axis=0))
-            mean = linear(np.concatenate(pixels)).mean(axis=0)
+            mean = linear(np.concatenate(pixels) / 255.0).mean(axis=0)
             centres[name] = triple(lab_of_linear(mean))
         return TaughtColours(centres, triple(np.mean(rails, axis=0)), triple(np.mean(belt, axis=0)), size)
     finally:
@@ -66,15 +65,8 @@ def face_mask(camera: CameraModel, center: tuple[float, float, float], yaw: floa
     turned ``yaw`` [rad], ``inset`` [m] inside its edges (no edge pixel, half belt, counts)."""
     h = edge / 2 - inset
     c, s = np.cos(yaw), np.sin(yaw)
-    corners = np.array([[center[0] + c * u - s * v, center[1] + s * u + c * v, center[2]]
-                        for u, v in ((-h, -h), (h, -h), (h, h), (-h, h))])
-    mask = np.zeros((camera.height, camera.width), np.uint8)
-    cv2.fillConvexPoly(mask, np.round(camera.world_to_pixel(corners)).astype(np.int32), 1)
-    return mask.astype(bool)
-
-
-# a placeholder for building the sensor's masks before anything is taught (its classes are never read)
-_NOTHING = TaughtColours({name: (50.0, 0.0, 0.0) for name in BIN_COLORS}, (1.0, 1.0, 1.0), (1.0, 1.0, 1.0), 0)
+    return camera.polygon_mask([(center[0] + c * u - s * v, center[1] + s * u + c * v, center[2])
+                                for u, v in ((-h, -h), (h, -h), (h, h), (-h, h))]).astype(bool)
 
 
 def main(argv: list[str] | None = None) -> int:

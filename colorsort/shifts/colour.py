@@ -12,13 +12,21 @@ _M = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.07217
 _WHITE = _M @ np.ones(3)  # D65
 
 
+def linear(c: np.ndarray) -> np.ndarray:
+    """Linear RGB of sRGB values ``c`` (any shape ending in 3; 1 is full scale, values above it kept)."""
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def lab_of_linear(lin: np.ndarray) -> np.ndarray:
+    """CIELAB (L* in [0, 100] for colours in gamut) of linear RGB (any shape ending in 3)."""
+    t = (lin @ _M.T) / _WHITE
+    f = np.where(t > (6 / 29) ** 3, np.cbrt(t), t / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.stack([116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])], axis=-1)
+
+
 def srgb_to_lab(rgb: np.ndarray | tuple[float, ...]) -> np.ndarray:
     """CIELAB (L* in [0, 100]) of an sRGB colour in [0, 1]^3."""
-    c = np.clip(np.asarray(rgb, float)[:3], 0.0, 1.0)
-    linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    t = (_M @ linear) / _WHITE
-    f = np.where(t > (6 / 29) ** 3, np.cbrt(t), t / (3 * (6 / 29) ** 2) + 4 / 29)
-    return np.array([116 * f[1] - 16, 500 * (f[0] - f[1]), 200 * (f[1] - f[2])])
+    return lab_of_linear(linear(np.clip(np.asarray(rgb, float)[:3], 0.0, 1.0)))
 
 
 def lab_to_srgb(lab: np.ndarray) -> np.ndarray:
