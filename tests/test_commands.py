@@ -113,3 +113,28 @@ def test_usage_shows_list_values_comma_separated_as_the_flags_take_them(capsys):
     assert "[--shift str,str,...]" in usage and "[--sweep.levels int,int,...]" in usage
     assert "[str, ...]" not in usage and "[int, ...]" not in usage
     assert eval_cli.parse_args(["--sweep", "--levels", "1,3"]).sweep.levels == (1, 3)
+
+
+def test_the_command_line_parser_uses_only_public_draccus_and_argparse():
+    """``cli/config_args.py`` subclasses nothing of draccus's or argparse's and reaches no ``_private`` name of
+    theirs: the defaults travel as a config file under the flags, the help is the parser's ``format_help``."""
+    import ast
+
+    from colorsort.cli import config_args
+    tree = ast.parse(Path(config_args.__file__).read_text())
+    private = [ast.unparse(n) for n in ast.walk(tree) if isinstance(n, ast.Attribute) and n.attr.startswith("_")
+               and not n.attr.startswith("__")]
+    private += [f"{n.module}.{a.name}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module
+                for a in n.names if a.name.startswith("_") and n.module != "__future__"]
+    subclassed = [ast.unparse(b) for n in ast.walk(tree) if isinstance(n, ast.ClassDef) for b in n.bases]
+    assert private == [] and subclassed == []
+
+
+def test_help_shows_the_recipes_defaults_and_no_group_config_files(tmp_path):
+    """draccus's per-group config-file flags (``--report str``) are not shown: ``--report DIR`` means
+    ``--report.dir`` here; the defaults shown are the chosen recipe's."""
+    text = help_of("colorsort-eval", tmp_path)
+    assert "Config file for" not in text and "[--report str]" not in text and "--report.dir [str]" in text
+    done = console_script("colorsort-baseline", ["--recipe", "camera-snapshot-touch-dr", "--help"], tmp_path)
+    shown = " ".join(done.stdout.split())
+    assert done.returncode == 0 and "(default: 96)" in shown and "Config file for" not in shown

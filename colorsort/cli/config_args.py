@@ -17,25 +17,31 @@ ColorSort's commands have always accepted keep working, so scripts written again
   ``--perturbations=[late_pass:100]``, merged with the entries already set by name).
 
 Errors exit 2 with one line: argparse's for unknown flags, the field's own ``ConfigError`` for a bad value.
+
+Only draccus's and argparse's public API: the spellings above become draccus's, and draccus parses them over one
+config file, the defaults (a recipe's) with the ``--config_path`` file over them; ``--help`` is the parser's
+``format_help`` with the defaults set.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import re
+import tempfile
 import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, is_dataclass
+from pathlib import Path
 from typing import Any
 
 import draccus
+import draccus.argparsing
 import mergedeep
-from draccus.argparsing import ArgumentParser
 from draccus.help_formatter import SimpleHelpFormatter
-from draccus.utils import CONFIG_ARG, ParsingError, deflatten
-from draccus.wrappers.dataclass_wrapper import DataclassWrapper
+from draccus.utils import CONFIG_ARG, ParsingError
 
 from colorsort.errors import ConfigError
 
@@ -60,76 +66,89 @@ class Spelling:
     joined: frozenset[str] = frozenset()
 
 
-class _Formatter(SimpleHelpFormatter):
-    """draccus's help, wider, the module docstring as written, a list's values shown as they are given."""
-
-    def __init__(self, prog: str) -> None:
-        super().__init__(prog, max_help_position=32, width=118)
-
-    def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
-        # draccus shows a tuple field as "str [str, ...]", values after spaces, which the flags do not take
-        return re.sub(r"^(\w+) \[\1, \.\.\.\]$", r"\1,\1,...", super()._format_args(action, default_metavar))
-
-
-class _Parser(ArgumentParser):
-    """draccus's parser with a default instance: shown in ``--help`` and under the config file and the flags."""
-
-    def __init__(self, config_class: type, defaults: Any, **kwargs: Any) -> None:
-        self.defaults = defaults
-        super().__init__(config_class, **kwargs)
-        # draccus's per-group config files (--report FILE) would take old flags' names: --config_path serves
-        def group_file(action: argparse.Action) -> bool:
-            return (action.help or "").startswith("Config file for ")
-
-        for action in filter(group_file, self.parser._actions):
-            for option in action.option_strings:
-                self.parser._option_string_actions.pop(option, None)
-        self.parser._actions = [a for a in self.parser._actions if not group_file(a)]
-        for group in self.parser._action_groups:
-            group._group_actions = [a for a in group._group_actions if not group_file(a)]
-        shown_from = defaults if defaults is not None else config_class()
-        for group in self.parser._action_groups:  # --help: each default as a flag spells it, nested ones too
-            for action in group._group_actions:
-                value = _value_at(shown_from, action.dest, missing=argparse.SUPPRESS)
-                action.default = value if value is argparse.SUPPRESS else shown(value)
-
-    def _set_dataclass(self, dataclass: Any, default: Any = None,
-                       dataclass_wrapper_class: type[DataclassWrapper] = DataclassWrapper) -> None:
-        super()._set_dataclass(dataclass, self.defaults if default is None else default, dataclass_wrapper_class)
-
-    def _postprocessing(self, parsed_args: argparse.Namespace) -> Any:
-        raw = dict(vars(parsed_args))
-        config_path: str | None = raw.pop(CONFIG_ARG, None)
-        given = {k: draccus.cfgparsing.parse_string(v) for k, v in raw.items()}
-        from_file: dict = {}
-        if config_path is not None:
-            with open(config_path, encoding="utf-8") as f:
-                from_file = draccus.cfgparsing.load_config(f, file=config_path) or {}
-        flags = deflatten(given, sep=".")
-        base = draccus.encode(self.defaults) if self.defaults is not None else {}
-        for layer in (from_file, flags):  # a choice changed drops the default choice's fields
-            for key, value in layer.items():
-                if isinstance(value, dict) and "type" in value and isinstance(base.get(key), dict) \
-                        and base[key].get("type") != value["type"]:
-                    base[key] = {}
-        return draccus.decode(self.config_class, mergedeep.merge({}, base, from_file, flags))
+# draccus's metavar of a tuple[X, ...], "str [str, ...]", and the spaces after it in an option's line
+_LIST_METAVAR = re.compile(r"((?:\w+ )*\w+) \[\1, \.\.\.\]( {2,})?")
 
 
 def parse_config[T](cls: type[T], argv: Sequence[str], *, prog: str, description: str | None = None,
                     defaults: T | None = None, spelling: Spelling = Spelling(), epilog: str | None = None) -> T:
     """``argv`` as an instance of ``cls`` (``defaults``' values where a flag is not given); ``--help`` prints and
-    exits 0; a bad flag exits 2; a bad value raises the ``ConfigError`` of the field that refused it."""
+    exits 0; a bad flag exits 2; a bad value raises the ``ConfigError`` of the field that refused it.
+
+    draccus parses the flags over one config file: ``defaults`` encoded, under the ``--config_path`` file given."""
     typed: dict[str, str] = {}
     args = respell(cls, defaults, list(argv), spelling, typed)
-    parser = _Parser(cls, defaults, prog=prog, description=description, epilog=epilog, formatter_class=_Formatter)
-    try:
-        return typing.cast(T, parser.parse_args(args))
-    except ParsingError as err:
-        reason = _reason(err)
-        for path, old in typed.items():  # name the flag as the user wrote it when its field refused the value
-            if f"{path.rpartition('.')[2]}=" in str(reason):
-                raise ConfigError(f"{old} (--{path}): {reason}") from err
-        raise reason from err
+    given_file = [a.partition("=")[2] for a in args if a.startswith(f"--{CONFIG_ARG}=")]
+    args = [a for a in args if not a.startswith(f"--{CONFIG_ARG}=")]
+    with tempfile.TemporaryDirectory(prefix="colorsort-config-") as tmp:
+        layered = Path(tmp) / "config.json"  # JSON: YAML would read 1e-05 as text
+        layered.write_text(json.dumps(layered_defaults(defaults, given_file[-1] if given_file else None, args)))
+        parser = draccus.argparsing.ArgumentParser(
+            cls, config_path=layered, prog=prog, description=description, epilog=epilog,
+            formatter_class=typing.cast(type[argparse.HelpFormatter],
+                                        functools.partial(SimpleHelpFormatter, max_help_position=32, width=118)))
+        if "--help" in args or "-h" in args:
+            print_help(parser.parser, defaults if defaults is not None else cls())
+        try:
+            return parser.parse_args(args)
+        except ParsingError as err:
+            reason = _reason(err)
+            for path, old in typed.items():  # name the flag as the user wrote it when its field refused the value
+                if f"{path.rpartition('.')[2]}=" in str(reason):
+                    raise ConfigError(f"{old} (--{path}): {reason}") from err
+            raise reason from err
+
+
+def layered_defaults(defaults: Any, config_path: str | None, args: Sequence[str]) -> dict:
+    """``defaults`` encoded, the ``config_path`` file's values over them; a choice field (``policy``) whose kind the
+    file or ``args`` change (``--policy.type=diffusion``) keeps none of the default kind's values."""
+    base = draccus.encode(defaults) if defaults is not None else {}
+    from_file: dict = {}
+    if config_path is not None:
+        with open(config_path, encoding="utf-8") as f:
+            from_file = draccus.cfgparsing.load_config(f, file=config_path) or {}
+    for key, value in list(base.items()):
+        if not (isinstance(value, dict) and "type" in value):
+            continue
+        in_file = from_file.get(key, {}).get("type") if isinstance(from_file.get(key), dict) else None
+        chosen = _choice(args, key) or in_file
+        if chosen is not None and chosen != value["type"]:
+            base[key] = {}
+    return mergedeep.merge({}, base, from_file)
+
+
+def print_help(parser: argparse.ArgumentParser, defaults: Any) -> None:
+    """``--help``: each flag with its default as a flag spells it (nested ones too), a list's values as the flags
+    take them (``str,str,...``, not draccus's ``str [str, ...]``), and without draccus's per-group config-file
+    flags (``--report`` is ``--report.dir`` here; ``--config_path`` reads a file); exits 0."""
+    parser.set_defaults(**{path: shown(value) for path, value in flattened(defaults)})
+    lines = [line for line in parser.format_help().splitlines() if "Config file for " not in line]
+    groups = {path for path, value in flattened(defaults, leaves=False)}
+    text = re.sub(r" \[--(" + "|".join(map(re.escape, sorted(groups, key=len, reverse=True))) + r") str\]", "",
+                  "\n".join(lines)) if groups else "\n".join(lines)
+    print(_LIST_METAVAR.sub(_comma_metavar, text))
+    raise SystemExit(0)
+
+
+def _comma_metavar(match: re.Match) -> str:
+    """``str,str,...`` for draccus's ``str [str, ...]`` (``str:float,...`` for a list of pairs), padded to keep the
+    help column where the longer text had it."""
+    entry = ":".join(match[1].split())
+    spelt = f"{entry},{entry},..."
+    return spelt + " " * (len(match[0]) - len(spelt)) if match[2] else spelt
+
+
+def flattened(obj: Any, prefix: str = "", leaves: bool = True) -> list[tuple[str, Any]]:
+    """``(path, value)`` of every field of the dataclass ``obj``, nested ones as ``group.field``; with ``leaves``
+    False, the nested dataclasses' own paths instead."""
+    found: list[tuple[str, Any]] = []
+    for f in fields(obj):
+        value, path = getattr(obj, f.name), f"{prefix}{f.name}"
+        if is_dataclass(value) and not isinstance(value, type):
+            found += ([] if leaves else [(path, value)]) + flattened(value, f"{path}.", leaves)
+        elif leaves:
+            found.append((path, value))
+    return found
 
 
 def _reason(err: BaseException) -> ConfigError:

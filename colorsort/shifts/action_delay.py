@@ -25,7 +25,7 @@ class ActionDelay(Shift):
 
     def apply(self, episode: Episode, level: float, drawn: dict[str, Any], rng: np.random.Generator) -> None:
         env = episode.env
-        q = env.mj_data.qpos[env.robots[0]._ref_joint_pos_indexes]
+        q = np.array([env.mj_data.joint(j).qpos[0] for j in env.robots[0].robot_joints])
         hold = np.concatenate([q, [-1.0, -1.0]])
         queue = deque([hold.copy() for _ in range(self.magnitude(level)[0])])
 
