@@ -16,16 +16,20 @@ INSTALL_REQUIRES = [
     "lerobot[dataset,training,evaluation]>=0.6.1,<0.7",
     "draccus>=0.11.6,<0.12",  # the commands' typed configs (cli/config_args.py), as LeRobot's; lerobot pins it too
     "mergedeep>=1.3.4,<2",  # config_args.py merges a --config_path file under the command line with it
-    "gymnasium>=1.0",
+    # imported directly (weights, tables, the recorder's parquet): lerobot's own ranges
+    "torch>=2.7,<2.12",
+    "safetensors>=0.4.3,<1",
+    "pyarrow>=21,<30",
+    "gymnasium>=1.0,<2",
     # robosuite.wrappers imports h5py (DataCollectionWrapper) for every wrapper:
-    "h5py>=3.10",
+    "h5py>=3.10,<4",
     "ruckig>=0.19,<0.20",
-    "tqdm>=4.66",
+    "tqdm>=4.66,<5",
     "av>=15,<16",
     # --executor ray: collection and evaluation on a Ray cluster (a local one, or one that spans a SLURM job)
     "ray>=2.52,<3",  # 2.52: token authentication (`ray get-auth-token`)
     # colorsort-baseline plots success against the number of demos and training time:
-    "matplotlib>=3.8",
+    "matplotlib>=3.8,<4",
     # robosuite's real run-time needs, for `pip install --no-deps robosuite`:
     "numba>=0.59",
     "scipy>=1.11",

@@ -2,6 +2,7 @@
 
 import ast
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -125,6 +126,29 @@ def test_no_module_imports_another_packages_private_modules():
             private += [f"{name}: {m}" for m in names
                         if not m.startswith("colorsort") and any(part.startswith("_") for part in m.split(".")[1:])]
     assert private == []
+
+
+# an import's top-level name -> the distribution that provides it, where the two differ
+DISTRIBUTION = {"cv2": "opencv-python-headless", "mujoco_warp": "mujoco-warp", "warp": "warp-lang"}
+
+
+def test_every_package_imported_is_declared_with_bounds_in_setup_py():
+    """A package ColorSort imports is one it declares (with a version range), never one it gets through another's
+    requirements (torch through lerobot)."""
+    setup_text = (PACKAGE.parent / "setup.py").read_text()
+    declared = {name.lower(): spec for name, spec in re.findall(r'"([A-Za-z0-9_.-]+)(?:\[[^\]]*\])?([<>=][^"]*)"',
+                                                                 setup_text)}
+    imported: set[str] = set()
+    for _, path in modules():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                imported |= {a.name.split(".")[0] for a in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                imported.add(node.module.split(".")[0])
+    third_party = {DISTRIBUTION.get(m, m).lower() for m in imported - set(sys.stdlib_module_names) - {"colorsort"}}
+    assert sorted(third_party - set(declared)) == []
+    unbounded = [f"{d}{declared[d]}" for d in third_party if "<" not in declared[d] and "==" not in declared[d]]
+    assert unbounded == []
 
 
 def test_no_function_grows_past_60_lines():
