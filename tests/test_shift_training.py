@@ -8,6 +8,8 @@ from helpers import exit_status, new_env
 from colorsort.cli.baseline import main as baseline_main
 from colorsort.cli.collect import main as collect_main
 from colorsort.cli.collect import parse_args as collect_args
+from colorsort.data.perturbations.late_pass import LatePass
+from colorsort.data.perturbations.late_pick import LatePick
 from colorsort.errors import ConfigError
 from colorsort.shifts import SHIFTS, parse_shifts
 from colorsort.shifts.base import between
@@ -99,8 +101,9 @@ def test_the_dr_recipe_records_every_training_range_and_its_dataset_says_so():
 def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_checkpoint_under_them(name, tmp_path,
                                                                                                     monkeypatch):
     """Every shift with a training range, box-size's included (the touch-off expert sorts any size), none wholly
-    held out; the images relit (and, for ACT, shifted) by LeRobot's image transforms; each checkpoint plays its
-    validation episodes unshifted and under the same ranges, both counted in the choice."""
+    held out; picks held back up to 30 steps (late_pick) so that a box waiting at a still arm is labelled go about
+    as often as late_pass labels it pass (docs/studies/2026-12-touch-dr-first-seed.md); the images not relit; each
+    checkpoint plays its validation episodes unshifted and under the same ranges, both counted in the choice."""
     from pathlib import Path
 
     from colorsort.training import pipeline_stages as stages
@@ -111,7 +114,9 @@ def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_ch
     assert {s.name for s in parse_shifts(recipe.demos.shift)} == trained and "box-size" in trained
     assert not trained & {"box-shape", "novel-distractors"}
     assert recipe.evaluation.select_shift == recipe.demos.shift and name.endswith("-dr")
-    assert "ColorJitter" in " ".join(recipe.training.augment_args())
+    holds = {p.name: p for p in recipe.demos.perturbations}
+    assert holds["late_pick"] == LatePick(30) and holds["late_pass"] == LatePass(100)
+    assert not recipe.training.image_relight and "ColorJitter" not in " ".join(recipe.training.augment_args())
     calls = []
 
     def fake_evaluate(recipe, model, variant, episodes, stem, envs, log_dir, first_seed=None, shift=""):
