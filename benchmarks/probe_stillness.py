@@ -19,8 +19,12 @@ from __future__ import annotations
 import argparse
 import os
 from collections import Counter
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from colorsort.benchmark.policies import LeRobotPolicy
 
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
@@ -65,11 +69,11 @@ def probe(policy_path: str, data: list[str], every: int, moving: bool) -> dict[s
     return table
 
 
-def decide(policy: object, image: np.ndarray, state: np.ndarray, camera: str) -> float:
+def decide(policy: LeRobotPolicy, image: np.ndarray, state: np.ndarray, camera: str) -> float:
     """The policy's ``belt_pass`` for one frame, its queue reset first."""
-    policy.policy.reset()  # type: ignore[attr-defined]
+    policy.policy.reset()
     name = camera.removeprefix("observation.images.")
-    action = policy.act({"pixels": {name: image}, "agent_pos": state.astype(np.float32)})  # type: ignore[attr-defined]
+    action = policy.act({"pixels": {name: image}, "agent_pos": state.astype(np.float32)})
     return float(action[-1])
 
 

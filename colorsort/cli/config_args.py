@@ -122,10 +122,11 @@ def print_help(parser: argparse.ArgumentParser, defaults: Any) -> None:
     take them (``str,str,...``, not draccus's ``str [str, ...]``), and without draccus's per-group config-file
     flags (``--report`` is ``--report.dir`` here; ``--config_path`` reads a file); exits 0."""
     parser.set_defaults(**{path: shown(value) for path, value in flattened(defaults)})
-    lines = [line for line in parser.format_help().splitlines() if "Config file for " not in line]
-    groups = {path for path, value in flattened(defaults, leaves=False)}
-    text = re.sub(r" \[--(" + "|".join(map(re.escape, sorted(groups, key=len, reverse=True))) + r") str\]", "",
-                  "\n".join(lines)) if groups else "\n".join(lines)
+    text = parser.format_help()
+    groups = re.findall(r"--(\S+) str +Config file for ", text)
+    text = "\n".join(line for line in text.splitlines() if "Config file for " not in line)
+    for group in groups:
+        text = text.replace(f" [--{group} str]", "")
     print(_LIST_METAVAR.sub(_comma_metavar, text))
     raise SystemExit(0)
 
@@ -138,16 +139,13 @@ def _comma_metavar(match: re.Match) -> str:
     return spelt + " " * (len(match[0]) - len(spelt)) if match[2] else spelt
 
 
-def flattened(obj: Any, prefix: str = "", leaves: bool = True) -> list[tuple[str, Any]]:
-    """``(path, value)`` of every field of the dataclass ``obj``, nested ones as ``group.field``; with ``leaves``
-    False, the nested dataclasses' own paths instead."""
+def flattened(obj: Any, prefix: str = "") -> list[tuple[str, Any]]:
+    """``(path, value)`` of every field of the dataclass ``obj``, nested ones as ``group.field``."""
     found: list[tuple[str, Any]] = []
     for f in fields(obj):
         value, path = getattr(obj, f.name), f"{prefix}{f.name}"
-        if is_dataclass(value) and not isinstance(value, type):
-            found += ([] if leaves else [(path, value)]) + flattened(value, f"{path}.", leaves)
-        elif leaves:
-            found.append((path, value))
+        nested = is_dataclass(value) and not isinstance(value, type)
+        found += flattened(value, f"{path}.") if nested else [(path, value)]
     return found
 
 
@@ -272,11 +270,11 @@ def _choice(argv: Sequence[str], prefix: str) -> str | None:
     return None
 
 
-def _value_at(obj: Any, path: str, missing: Any = None) -> Any:
-    """The value at ``path`` (``training.steps``) in ``obj``, ``missing`` where there is none."""
+def _value_at(obj: Any, path: str) -> Any:
+    """The value at ``path`` (``training.steps``) in ``obj``, None where there is none."""
     for part in path.split("."):
         if obj is None or not hasattr(obj, part):
-            return missing
+            return None
         obj = getattr(obj, part)
     return obj
 
