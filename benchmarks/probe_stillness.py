@@ -11,7 +11,8 @@ box (from the recorded box state): how many frames, on how many of them the expe
 ``belt_pass`` above 0) and on how many the policy would. A policy that passes a class colour there that the
 expert picks has learned that a still arm means "let it through" (the demos' ``late_pass`` holds label a still
 arm *pass* for up to ``late_pass`` frames a distractor, ``late_pick`` *go* for up to ``late_pick`` frames a
-pick). ``--moving`` adds the same frames with the joint velocities set to 0.3 rad/s.
+pick). ``--moving`` adds the same frames with the joint velocities set to 0.3 rad/s. Without ``--policy`` it
+counts the demos' frames and the expert's passes alone.
 """
 
 from __future__ import annotations
@@ -32,16 +33,18 @@ STILL = 0.05  # rad/s: a joint slower than this stands still
 MOVING = 0.3  # rad/s: the joint velocity --moving puts in the state
 
 
-def probe(policy_path: str, data: list[str], every: int, moving: bool) -> dict[str, Counter]:
-    """Per colour: ``frames``, ``expert`` (passes), ``policy`` (passes) and, with ``moving``, ``policy_moving``."""
+def probe(policy_path: str | None, data: list[str], every: int, moving: bool) -> dict[str, Counter]:
+    """Per colour: ``frames``, ``expert`` (passes), with a policy ``policy`` (passes) and, with ``moving``,
+    ``policy_moving``."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     from colorsort.benchmark.policies import LeRobotPolicy
     from colorsort.cell.observation import FLAGS, StateLayout
     from colorsort.config import COLORS
 
-    policy = LeRobotPolicy(policy_path)
-    policy.task = ""
+    policy = LeRobotPolicy(policy_path) if policy_path else None
+    if policy:
+        policy.task = ""
     table: dict[str, Counter] = {}
     for root in data:
         ds = LeRobotDataset("local/colorsort-probe", root=root, video_backend="pyav")
@@ -57,10 +60,12 @@ def probe(policy_path: str, data: list[str], every: int, moving: bool) -> dict[s
             if ray < 0.5 or suction > 0.5 or np.abs(vel).max() > STILL or box[i, :len(COLORS)].max() < 0.5:
                 continue
             colour = list(COLORS)[int(box[i, :len(COLORS)].argmax())]
-            image = (ds[i][camera].numpy().transpose(1, 2, 0) * 255).round().astype(np.uint8)
             row = table.setdefault(colour, Counter())
             row["frames"] += 1
             row["expert"] += int(action[i, -1] > 0)
+            if policy is None:
+                continue
+            image = (ds[i][camera].numpy().transpose(1, 2, 0) * 255).round().astype(np.uint8)
             row["policy"] += int(decide(policy, image, s, camera) > 0)
             if moving:
                 fast = s.copy()
@@ -79,16 +84,18 @@ def decide(policy: LeRobotPolicy, image: np.ndarray, state: np.ndarray, camera: 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--policy", required=True, help="a LeRobot checkpoint folder")
+    parser.add_argument("--policy", help="a LeRobot checkpoint folder (none: the demos' counts alone)")
     parser.add_argument("--data", nargs="+", required=True, help="recorded datasets (the parts, with the box state)")
     parser.add_argument("--every", type=int, default=3, help="every N-th frame (default 3)")
     parser.add_argument("--moving", action="store_true", help="also the same frames with the joints moving")
     args = parser.parse_args()
     table = probe(args.policy, args.data, args.every, args.moving)
-    print(f"{args.policy}: frames with a box waiting at a still arm, passes by the expert and by the policy")
+    print(f"{args.policy or 'the demos'}: frames with a box waiting at a still arm, passes by the expert"
+          + (" and by the policy" if args.policy else ""))
     for colour, row in sorted(table.items()):
-        extra = f", the policy with the arm moving {row['policy_moving']}" if args.moving else ""
-        print(f"  {colour:<7} {row['frames']:>5} frames: expert {row['expert']:>5}, policy {row['policy']:>5}{extra}")
+        extra = f", policy {row['policy']:>5}" if args.policy else ""
+        extra += f", the policy with the arm moving {row['policy_moving']}" if args.policy and args.moving else ""
+        print(f"  {colour:<7} {row['frames']:>5} frames: expert {row['expert']:>5}{extra}")
 
 
 if __name__ == "__main__":
