@@ -101,9 +101,9 @@ def test_the_dr_recipe_records_every_training_range_and_its_dataset_says_so():
 def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_checkpoint_under_them(name, tmp_path,
                                                                                                     monkeypatch):
     """Every shift with a training range, box-size's included (the touch-off expert sorts any size), none wholly
-    held out; passes held back up to 30 steps (late_pass) and picks up to 10 (late_pick), so that a box waiting at a
-    still arm is labelled go about as often as pass and no held pick's chunk stands long (docs/studies/
-    2026-12-touch-dr-first-seed.md); the images not relit; each
+    held out; passes held back up to 100 steps (late_pass) and picks up to 30 (late_pick), so that a box waiting at
+    a still arm is labelled go about as often as pass (docs/studies/2026-12-touch-dr-first-seed.md); the images not
+    relit; each
     checkpoint plays its validation episodes unshifted and under the same ranges, both counted in the choice."""
     from pathlib import Path
 
@@ -116,7 +116,7 @@ def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_ch
     assert not trained & {"box-shape", "novel-distractors"}
     assert recipe.evaluation.select_shift == recipe.demos.shift and name.endswith("-dr")
     holds = {p.name: p for p in recipe.demos.perturbations}
-    assert holds["late_pick"] == LatePick(10) and holds["late_pass"] == LatePass(30)
+    assert holds["late_pick"] == LatePick(30) and holds["late_pass"] == LatePass(100)
     assert not recipe.training.image_relight and "ColorJitter" not in " ".join(recipe.training.augment_args())
     calls = []
 
