@@ -103,8 +103,8 @@ def test_the_touch_dr_recipes_randomise_every_training_range_and_choose_their_ch
     """Every shift with a training range, box-size's included (the touch-off expert sorts any size), none wholly
     held out; passes held back up to 100 steps (late_pass) and picks up to 30 (late_pick), so that a box waiting at
     a still arm is labelled go about as often as pass (docs/studies/2026-12-touch-dr-first-seed.md); the images not
-    relit; each
-    checkpoint plays its validation episodes unshifted and under the same ranges, both counted in the choice."""
+    relit; each checkpoint plays its validation episodes unshifted and under the same ranges, both counted in the
+    choice."""
     from pathlib import Path
 
     from colorsort.training import pipeline_stages as stages

@@ -270,9 +270,10 @@ TOUCH_DR_SHIFTS = ",".join(f"{name}:train" for name in trainable())
 # The randomised recipe's policies, on demos of the touch-off expert: every training range, twice the demos, the
 # checkpoint chosen under the ranges too. A box waiting at a still arm must be labelled go about as often as pass:
 # with late_pass 100 and late_pick 10 (2,274 frames pass, 1,234 go) a seed let every red box through, with late_pass
-# 30 and late_pick 10 (980 against 1,243) it let no distractor through; late_pass 100 and late_pick 30 (2,273
-# against 3,223) sorts both (docs/studies/2026-12-touch-dr-first-seed.md). The images are not relit: the Planckian
-# jitter was not the cause there, and the demos' light-color and lighting ranges relight the cell itself.
+# 30 and late_pick 10 (980 against 1,243) it let no distractor through; with late_pass 100 and late_pick 30 (2,273
+# against 3,223) seed 1001 sorts both, seed 1000 still lets no distractor through: the balance alone does not settle
+# the decision (docs/studies/2026-12-touch-dr-first-seed.md). The images are not relit: the Planckian jitter was not
+# the cause there, and the demos' light-color and lighting ranges relight the cell itself.
 TOUCH_DR_DEMOS = DemosConfig(train_mix=CAMERA_MIX, counts=(96,), cameras=("snapshot",), image_size=32,
                              perturbations=(LatePass(100), LatePick(30), Brightness(0.45, 0.75)), shift=TOUCH_DR_SHIFTS)
 TOUCH_DR_EVALUATION = EvaluationConfig(select_episodes=10, select_shift=TOUCH_DR_SHIFTS)
